@@ -1,0 +1,239 @@
+"""Hierarchical blackboards with BT.CPP's lookup, remapping and type-locking rules (spec 8).
+
+Each SubTree expansion gets a child blackboard. A key resolves, in order: ``@key`` in the
+root; the local map; an explicit subtree remapping to the parent; the parent itself when
+autoremap is on (private ``_keys`` excepted). Entries are shared objects, so a remapped key in
+a subtree *is* the parent's entry. Everything runs on one event loop, so there are no locks.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+from .errors import BTRuntimeError, LogicError
+from .ports import (ANYTYPE, EMPTY, PortType, convert_exact, type_of_value,
+                    value_to_string)
+
+
+class Entry:
+    """One blackboard slot: value (or EMPTY), declared type, write counter and timestamp."""
+
+    __slots__ = ("value", "type", "sequence_id", "stamp", "__weakref__")
+
+    def __init__(self, type_: PortType = ANYTYPE, value: Any = EMPTY):
+        self.value = value
+        self.type = type_
+        self.sequence_id = 0
+        self.stamp = 0
+
+    def write(self, value: Any) -> None:
+        """Store without any checks, bumping the sequence id and the timestamp."""
+        self.value = value
+        self.sequence_id += 1
+        self.stamp = time.monotonic_ns()
+
+    @property
+    def is_empty(self) -> bool:
+        return self.value is EMPTY
+
+    def __repr__(self) -> str:
+        return f"Entry({self.value!r}, type={self.type.name}, seq={self.sequence_id})"
+
+
+def _type_mismatch(key: str, previous: PortType, current: PortType) -> LogicError:
+    return LogicError(f"Blackboard entry [{key}]: once declared, the type of a port shall not change. "
+                      f"Previously declared type [{previous.name}], current type [{current.name}]")
+
+
+class Blackboard:
+    """A scoped key -> Entry map with a parent, subtree remappings and optional autoremap."""
+
+    __slots__ = ("_storage", "parent", "_remapping", "autoremap", "__weakref__")
+
+    def __init__(self, parent: Blackboard | None = None):
+        self._storage: dict[str, Entry] = {}
+        self.parent = parent
+        self._remapping: dict[str, str] = {}
+        self.autoremap = False
+
+    @classmethod
+    def create(cls, parent: Blackboard | None = None) -> Blackboard:
+        return cls(parent)
+
+    # -- structure -----------------------------------------------------------------------------
+    def root(self) -> Blackboard:
+        bb = self
+        while bb.parent is not None:
+            bb = bb.parent
+        return bb
+
+    def add_subtree_remapping(self, internal: str, external: str) -> None:
+        self._remapping[internal] = external
+
+    def enable_auto_remapping(self, enabled: bool = True) -> None:
+        self.autoremap = enabled
+
+    @property
+    def remappings(self) -> dict[str, str]:
+        return dict(self._remapping)
+
+    # -- lookup --------------------------------------------------------------------------------
+    def get_entry(self, key: str) -> Entry | None:
+        """Resolve ``key`` through '@', the local map, remappings and autoremap (spec 8.2)."""
+        if key[:1] == "@":
+            return self.root().get_entry(key[1:])
+        entry = self._storage.get(key)
+        if entry is not None:
+            return entry
+        parent = self.parent
+        if parent is not None:
+            ext = self._remapping.get(key)
+            if ext is not None:
+                return parent.get_entry(ext)
+            if self.autoremap and key[:1] != "_":
+                return parent.get_entry(key)
+        return None
+
+    def __contains__(self, key: str) -> bool:
+        return self.get_entry(key) is not None
+
+    def keys(self) -> list[str]:
+        """Local keys only, like BT.CPP getKeys()."""
+        return list(self._storage)
+
+    get_keys = keys
+
+    def local_entries(self) -> dict[str, Entry]:
+        return self._storage
+
+    # -- creation ------------------------------------------------------------------------------
+    def create_entry(self, key: str, type_: PortType = ANYTYPE) -> Entry:
+        """Create (or return, after a type check) the entry ``key`` (spec 8.3)."""
+        if key[:1] == "@":
+            if "@" in key[1:]:
+                raise BTRuntimeError("Character '@' used multiple times in the key")
+            return self.root().create_entry(key[1:], type_)
+        entry = self._storage.get(key)
+        if entry is not None:
+            if entry.type.strongly_typed and type_.strongly_typed and entry.type != type_:
+                raise _type_mismatch(key, entry.type, type_)
+            return entry
+        parent = self.parent
+        if parent is not None:
+            ext = self._remapping.get(key)
+            if ext is not None:
+                return parent.create_entry(ext, type_)
+            if self.autoremap and key[:1] != "_":
+                return parent.create_entry(key, type_)
+        entry = Entry(type_)
+        self._storage[key] = entry
+        return entry
+
+    # -- writing -------------------------------------------------------------------------------
+    def set(self, key: str, value: Any) -> None:
+        """Write with BT.CPP's rules (spec 8.4): first typed write locks the entry's type."""
+        if key[:1] == "@":
+            self.root().set(key[1:], value)
+            return
+        entry = self._storage.get(key)
+        if entry is None:
+            # Not local: create through remapping/autoremap rules (may land in a parent); an
+            # existing entry found that way is type-checked strictly and written as is.
+            new_type = ANYTYPE if isinstance(value, str) else type_of_value(value)
+            self.create_entry(key, new_type).write(value)
+            return
+        self._write_local(key, entry, value)
+
+    def _write_local(self, key: str, entry: Entry, value: Any) -> None:
+        declared = entry.type
+        if not declared.strongly_typed:
+            entry.type = type_of_value(value)
+            entry.write(value)
+            return
+        value_type = type_of_value(value)
+        if value_type == declared:
+            entry.write(value)
+            return
+        if isinstance(value, str):
+            entry.write(declared.from_string(value))
+            return
+        ok, converted = convert_exact(value, declared)
+        if ok:
+            entry.write(converted)
+            return
+        if declared.kind == "custom" and declared.py_type is not None and isinstance(value, declared.py_type):
+            entry.write(value)
+            return
+        if declared.kind == "list" and isinstance(value, list):
+            entry.write(value)
+            return
+        raise self._set_mismatch(key, declared, value_type)
+
+    def _set_mismatch(self, key: str, previous: PortType, current: PortType) -> LogicError:
+        return LogicError(f"Blackboard::set({key}): once declared, the type of a port shall not change. "
+                          f"Previously declared type [{previous.name}], current type [{current.name}]")
+
+    def unset(self, key: str) -> None:
+        """Remove a *local* key (no '@', no remapping); nothing happens if it is absent."""
+        self._storage.pop(key, None)
+
+    # -- reading -------------------------------------------------------------------------------
+    def get(self, key: str, type_: PortType | type | None = None, default: Any = EMPTY) -> Any:
+        """Read ``key``; optionally cast it to ``type_`` (spec 8.5). ``default`` if missing."""
+        entry = self.get_entry(key)
+        if entry is None:
+            if default is not EMPTY:
+                return default
+            raise BTRuntimeError(f"Blackboard::get() error. Missing key [{key}]")
+        if entry.value is EMPTY:
+            if default is not EMPTY:
+                return default
+            raise BTRuntimeError(f"Blackboard::get() error. Entry [{key}] hasn't been initialized, yet")
+        if type_ is None:
+            return entry.value
+        from .ports import port_type
+        return port_type(type_).coerce(entry.value)
+
+    def get_stamped(self, key: str) -> tuple[Any, int, int]:
+        """(value, sequence_id, timestamp_ns) of ``key``."""
+        entry = self.get_entry(key)
+        if entry is None or entry.value is EMPTY:
+            raise BTRuntimeError(f"Blackboard::get() error. Missing key [{key}]")
+        return entry.value, entry.sequence_id, entry.stamp
+
+    def clone_into(self, dst: Blackboard) -> None:
+        """Copy every local entry into ``dst``; keys of dst not in self are removed."""
+        for key in list(dst._storage):
+            if key not in self._storage:
+                del dst._storage[key]
+        for key, src in self._storage.items():
+            existing = dst._storage.get(key)
+            if existing is not None:
+                existing.type = src.type
+                existing.write(src.value)
+            else:
+                clone = Entry(src.type, src.value)
+                clone.sequence_id = src.sequence_id
+                clone.stamp = src.stamp
+                dst._storage[key] = clone
+
+    def debug_message(self) -> str:
+        lines = []
+        for key, entry in self._storage.items():
+            lines.append(f"{key} ({entry.type.name}) -> {value_to_string(entry.value)}")
+        for internal, external in self._remapping.items():
+            lines.append(f"[{internal}] remapped to port of parent tree [{external}]")
+        return "\n".join(lines)
+
+    def to_dict(self, convert: Callable[[Any], Any] | None = None) -> dict[str, Any]:
+        """Local entries as plain values (EMPTY -> None); ``convert`` maps each value."""
+        out = {}
+        for key, entry in self._storage.items():
+            value = None if entry.value is EMPTY else entry.value
+            out[key] = convert(value) if convert else value
+        return out
+
+    def __repr__(self) -> str:
+        return f"Blackboard(keys={self.keys()}, remap={self._remapping}, autoremap={self.autoremap})"

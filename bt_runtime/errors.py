@@ -1,0 +1,59 @@
+"""Exception types. They mirror BT.CPP's hierarchy so callers can catch the same classes.
+
+``LogicError`` is a programming/configuration error, ``BTRuntimeError`` a data or run-time
+error; both derive from ``BehaviorTreeException``. Load-time problems raise ``XMLLoadError``
+(a LogicError) carrying the file, line and element so a person can find them. An exception
+raised from a node's ``tick()`` is wrapped once, at the node where it started, in
+``NodeExecutionError`` (BT.CPP 4.10), which keeps the node's full path.
+"""
+
+from __future__ import annotations
+
+
+class BehaviorTreeException(Exception):
+    """Base of every error raised by bt_runtime."""
+
+
+class LogicError(BehaviorTreeException):
+    """A programming or configuration error (bad tree, bad registration, misuse of the API)."""
+
+
+class BTRuntimeError(BehaviorTreeException):
+    """A data or run-time error (missing blackboard entry, failed conversion, ...)."""
+
+
+class XMLLoadError(LogicError):
+    """A problem in a tree file, located by file, line and element."""
+
+    def __init__(self, message: str, *, file: str | None = None, line: int | None = None,
+                 element: str | None = None):
+        self.message = message
+        self.file = file
+        self.line = line
+        self.element = element
+        super().__init__(self._format())
+
+    def _format(self) -> str:
+        where = []
+        if self.file:
+            where.append(str(self.file))
+        if self.line:
+            where.append(str(self.line))
+        prefix = ":".join(where)
+        elem = f" <{self.element}>" if self.element else ""
+        if prefix or elem:
+            return f"{prefix}{elem}: {self.message}".lstrip()
+        return self.message
+
+    def to_dict(self) -> dict:
+        return {"file": self.file, "line": self.line, "element": self.element, "message": self.message}
+
+
+class NodeExecutionError(BehaviorTreeException):
+    """An exception raised inside a node's tick, wrapped once with the node's path and type."""
+
+    def __init__(self, node_path: str, registration_id: str, original: BaseException):
+        self.node_path = node_path
+        self.registration_id = registration_id
+        self.original = original
+        super().__init__(f"Exception in node '{node_path}' [{registration_id}]: {original}")
