@@ -1,0 +1,146 @@
+"""Leaf nodes BT.CPP registers by default: AlwaysSuccess/Failure, Script, ScriptCondition,
+SetBlackboard, UnsetBlackboard (spec 4.5). Sleep and WasEntryUpdated live with their kin."""
+
+from __future__ import annotations
+
+from ..errors import BTRuntimeError, LogicError
+from ..node import ConditionNode, NodeConfig, SyncActionNode
+from ..ports import ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port
+from ..status import FAILURE, SUCCESS, NodeStatus
+
+
+class AlwaysSuccessNode(SyncActionNode):
+    def tick(self) -> NodeStatus:
+        return SUCCESS
+
+
+class AlwaysFailureNode(SyncActionNode):
+    def tick(self) -> NodeStatus:
+        return FAILURE
+
+
+class _ScriptHolder:
+    """Compile the ``code`` port once; recompile only if its text changes."""
+
+    _kind = "Script"
+
+    def _init_script(self) -> None:
+        self._code_text: str | None = None
+        self._script = None
+        if "code" not in self.config.input_ports:
+            raise LogicError(f"Missing port [code] in {self._kind}")
+        self._load()
+
+    def _load(self) -> None:
+        from ..script import compile_script
+
+        try:
+            text = self.get_input("code")
+        except BTRuntimeError:
+            raise BTRuntimeError(f"Missing port [code] in {self._kind}") from None
+        if not isinstance(text, str):
+            raise BTRuntimeError(f"The port [code] of {self._kind} must contain a string")
+        if text != self._code_text:
+            self._script = compile_script(text)
+            self._code_text = text
+
+
+class ScriptNode(_ScriptHolder, SyncActionNode):
+    """Run a script (assignments, expressions); always SUCCESS."""
+
+    _kind = "Script"
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("code", str, description="Piece of code that can be parsed")]
+
+    def __init__(self, name: str, config: NodeConfig):
+        super().__init__(name, config)
+        self._init_script()
+
+    def tick(self) -> NodeStatus:
+        self._load()
+        self._script.run(self.config.blackboard, self.config.enums)
+        return SUCCESS
+
+
+class ScriptConditionNode(_ScriptHolder, ConditionNode):
+    """SUCCESS if the script's last value is true, else FAILURE."""
+
+    _kind = "ScriptCondition"
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("code", ANYTYPE,
+                           description="Piece of code that can be parsed. Must return false or true")]
+
+    def __init__(self, name: str, config: NodeConfig):
+        super().__init__(name, config)
+        self._init_script()
+
+    def tick(self) -> NodeStatus:
+        self._load()
+        cfg = self.config
+        return SUCCESS if self._script.run_bool(cfg.blackboard, cfg.enums) else FAILURE
+
+
+class SetBlackboardNode(SyncActionNode):
+    """Write ``value`` (a literal string or ``{other_key}``) into the entry named by ``output_key``."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("value", ANYTYPE, description="Value to be written into the output_key"),
+                bidirectional_port("output_key", ANYTYPE,
+                                   description="Name of the blackboard entry where the value should be written")]
+
+    def tick(self) -> NodeStatus:
+        try:
+            output_key = self.get_input("output_key")
+        except BTRuntimeError:
+            raise BTRuntimeError("missing port [output_key]") from None
+        output_key = str(output_key)
+        cfg = self.config
+        bb = cfg.blackboard
+        value_str = cfg.input_ports.get("value")
+        if value_str is None:
+            raise BTRuntimeError("missing port [value]")
+        dst = bb.get_entry(output_key)
+        src_key = blackboard_key(value_str, "value")
+        if src_key is not None:
+            src = bb.get_entry(src_key)
+            if src is None:
+                raise BTRuntimeError("Can't find the port referred by [value]")
+            if dst is None:
+                bb.create_entry(output_key, src.type)
+                dst = bb.get_entry(output_key)
+            out = src.value
+        else:
+            out = value_str
+        if out is EMPTY:
+            return FAILURE
+        if dst is not None and dst.type.name != STRING.name and isinstance(out, str):
+            if not dst.type.strongly_typed:
+                dst.write(EMPTY)  # BT.CPP quirk: an untyped destination becomes "not initialized"
+                return SUCCESS
+            try:
+                out = dst.type.from_string(out, cfg.enums)
+            except Exception as exc:
+                raise LogicError(f"Can't convert string [{out}] to type [{dst.type.name}]: {exc}") from None
+        bb.set(output_key, out)
+        return SUCCESS
+
+
+class UnsetBlackboardNode(SyncActionNode):
+    """Remove ``key`` from the node's own (local) blackboard."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("key", str, description="Key of the entry to remove")]
+
+    def tick(self) -> NodeStatus:
+        try:
+            key = self.get_input("key")
+        except BTRuntimeError:
+            raise BTRuntimeError("missing input port [key]") from None
+        self.config.blackboard.unset(key)
+        return SUCCESS

@@ -1,0 +1,240 @@
+"""IfThenElse, WhileDoElse, Switch2..6 and TryCatch (spec 4.2), quirks included.
+
+Quirks kept on purpose because trees behave differently otherwise: IfThenElse does not reset
+a FAILED condition when it has no else branch; WhileDoElse never resets its condition while a
+branch runs; a skipped condition raises in both.
+"""
+
+from __future__ import annotations
+
+import re
+
+from ..errors import BehaviorTreeException, LogicError
+from ..node import ControlNode, NodeConfig
+from ..ports import input_port, parse_float
+from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
+
+_FLT_EPSILON = 1.1920928955078125e-07
+_FULL_INT = re.compile(r"-?[0-9]+")
+_FULL_DOUBLE = re.compile(r"-?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|-?inf(?:inity)?|-?nan",
+                          re.IGNORECASE)
+
+
+class IfThenElseNode(ControlNode):
+    """condition, then-branch, optional else-branch; the condition is not re-checked while
+    a branch runs."""
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._child_idx = 0
+        super().__init__(name, config)
+
+    def tick(self) -> NodeStatus:
+        children = self.children
+        n = len(children)
+        if n != 2 and n != 3:
+            raise LogicError("IfThenElseNode must have either 2 or 3 children")
+        self.set_status(RUNNING)
+        if self._child_idx == 0:
+            cond = children[0].execute_tick()
+            if cond is RUNNING:
+                return RUNNING
+            if cond is SUCCESS:
+                self._child_idx = 1
+            elif cond is FAILURE:
+                if n == 3:
+                    self._child_idx = 2
+                else:
+                    return FAILURE
+        if self._child_idx > 0:
+            status = children[self._child_idx].execute_tick()
+            if status is RUNNING:
+                return RUNNING
+            self.reset_children()
+            self._child_idx = 0
+            return status
+        raise LogicError("Something unexpected happened in IfThenElseNode")
+
+    def halt(self) -> None:
+        self._child_idx = 0
+        ControlNode.halt(self)
+
+
+class WhileDoElseNode(ControlNode):
+    """Reactive if/else: the condition is ticked every tick and switches branches."""
+
+    def tick(self) -> NodeStatus:
+        children = self.children
+        n = len(children)
+        if n != 2 and n != 3:
+            raise LogicError("WhileDoElseNode must have either 2 or 3 children")
+        self.set_status(RUNNING)
+        cond = children[0].execute_tick()
+        if cond is RUNNING:
+            return RUNNING
+        status = IDLE
+        if cond is SUCCESS:
+            if n == 3:
+                self.halt_child(2)
+            status = children[1].execute_tick()
+        elif cond is FAILURE:
+            if n == 3:
+                self.halt_child(1)
+                status = children[2].execute_tick()
+            else:
+                status = FAILURE
+        if status is RUNNING:
+            return RUNNING
+        self.reset_children()
+        return status
+
+
+def _to_int(text: str, enums: dict[str, int]) -> int | None:
+    if text in enums:
+        return enums[text]
+    if _FULL_INT.fullmatch(text):
+        value = int(text)
+        if -(2**31) <= value < 2**31:
+            return value
+    return None
+
+
+def _to_real(text: str, enums: dict[str, int]) -> float | None:
+    if text in enums:
+        return float(enums[text])
+    if _FULL_DOUBLE.fullmatch(text):
+        try:
+            return parse_float(text)
+        except BehaviorTreeException:
+            return None
+    return None
+
+
+def switch_case_matches(a: str, b: str, enums: dict[str, int]) -> bool:
+    """BT.CPP CheckStringEquality: identical, or equal as ints, or as doubles within FLT_EPSILON."""
+    if a == b:
+        return True
+    ia, ib = _to_int(a, enums), _to_int(b, enums)
+    if ia is not None and ib is not None and ia == ib:
+        return True
+    ra, rb = _to_real(a, enums), _to_real(b, enums)
+    return ra is not None and rb is not None and abs(ra - rb) <= _FLT_EPSILON
+
+
+class SwitchNode(ControlNode):
+    """Tick the child whose ``case_i`` equals ``variable``; the last child is the default."""
+
+    num_cases = 2
+
+    @classmethod
+    def provided_ports(cls):
+        ports = [input_port("variable", str)]
+        ports += [input_port(f"case_{i}", str) for i in range(1, cls.num_cases + 1)]
+        return ports
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._running_child = -1
+        super().__init__(name, config)
+
+    def tick(self) -> NodeStatus:
+        k = self.num_cases
+        children = self.children
+        if len(children) != k + 1:
+            raise LogicError("Wrong number of children in SwitchNode; must be (num_cases + default)")
+        match = k
+        variable = self.get_input("variable", None)
+        if variable is not None:
+            enums = self.config.enums
+            for i in range(k):
+                value = self.get_input(f"case_{i + 1}", None)
+                if value is not None and switch_case_matches(variable, value, enums):
+                    match = i
+                    break
+        if self._running_child != -1 and self._running_child != match:
+            self.halt_child(self._running_child)
+        status = children[match].execute_tick()
+        if status is SKIPPED:
+            self._running_child = -1
+            return SKIPPED
+        if status is RUNNING:
+            self._running_child = match
+        else:
+            self.reset_children()
+            self._running_child = -1
+        return status
+
+    def halt(self) -> None:
+        self._running_child = -1
+        ControlNode.halt(self)
+
+
+def switch_class(k: int) -> type[SwitchNode]:
+    return type(f"Switch{k}Node", (SwitchNode,), {"num_cases": k, "__doc__": SwitchNode.__doc__})
+
+
+class TryCatchNode(ControlNode):
+    """Run children 0..N-2 like a Sequence; on a failure run the last (catch) child, then
+    FAILURE. ``catch_on_halt`` also runs the catch child when halted mid-try (BT.CPP 4.9+)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("catch_on_halt", bool, False,
+                           "If true, the catch child is also executed when the node is halted")]
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._idx = 0
+        self._skipped = 0
+        self._in_catch = False
+        super().__init__(name, config)
+
+    def tick(self) -> NodeStatus:
+        children = self.children
+        n = len(children)
+        if n < 2:
+            raise LogicError(f"[{self.name}]: TryCatch requires at least 2 children")
+        if self._status is IDLE:
+            self._skipped = 0
+            self._in_catch = False
+        self.set_status(RUNNING)
+        try_count = n - 1
+        if self._in_catch:
+            status = children[-1].execute_tick()
+            if status is RUNNING:
+                return RUNNING
+            self.reset_children()
+            self._idx = 0
+            self._in_catch = False
+            return FAILURE
+        while self._idx < try_count:
+            status = children[self._idx].execute_tick()
+            if status is RUNNING:
+                return RUNNING
+            if status is FAILURE:
+                self.reset_children()
+                self._idx = 0
+                self._in_catch = True
+                return self.tick()
+            if status is SUCCESS:
+                self._idx += 1
+            elif status is SKIPPED:
+                self._idx += 1
+                self._skipped += 1
+            else:
+                raise LogicError(f"[{self.name}]: A child should not return IDLE")
+        all_skipped = self._skipped == try_count
+        self.reset_children()
+        self._idx = 0
+        self._skipped = 0
+        return SKIPPED if all_skipped else SUCCESS
+
+    def halt(self) -> None:
+        catch_on_halt = bool(self.get_input("catch_on_halt", False))
+        children = self.children
+        if (catch_on_halt and not self._in_catch and self._status is not IDLE and len(children) >= 2):
+            for i in range(len(children) - 1):
+                self.halt_child(i)
+            if children[-1].execute_tick() is RUNNING:
+                self.halt_child(len(children) - 1)
+        self._idx = 0
+        self._skipped = 0
+        self._in_catch = False
+        ControlNode.halt(self)

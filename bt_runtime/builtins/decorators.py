@@ -1,0 +1,252 @@
+"""Stateless-ish decorators: Inverter, ForceSuccess/Failure, KeepRunningUntilFailure, Repeat,
+RetryUntilSuccessful, RunOnce, Precondition, SubTree (spec 4.3, 4.4)."""
+
+from __future__ import annotations
+
+from ..errors import BTRuntimeError, LogicError
+from ..node import DecoratorNode, NodeConfig
+from ..ports import BOOL, PortInfo, input_port
+from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType, PortDirection
+
+
+def _idle(node: DecoratorNode) -> LogicError:
+    return LogicError(f"[{node.name}]: A children should not return IDLE")
+
+
+class InverterNode(DecoratorNode):
+    def tick(self) -> NodeStatus:
+        self.set_status(RUNNING)
+        status = self.child.execute_tick()
+        if status is SUCCESS:
+            self.reset_child()
+            return FAILURE
+        if status is FAILURE:
+            self.reset_child()
+            return SUCCESS
+        if status is RUNNING or status is SKIPPED:
+            return status
+        raise _idle(self)
+
+
+class ForceSuccessNode(DecoratorNode):
+    _forced = SUCCESS
+
+    def tick(self) -> NodeStatus:
+        self.set_status(RUNNING)
+        status = self.child.execute_tick()
+        if status is SUCCESS or status is FAILURE:
+            self.reset_child()
+            return self._forced
+        return status
+
+
+class ForceFailureNode(ForceSuccessNode):
+    _forced = FAILURE
+
+
+class KeepRunningUntilFailureNode(DecoratorNode):
+    def tick(self) -> NodeStatus:
+        self.set_status(RUNNING)
+        status = self.child.execute_tick()
+        if status is FAILURE:
+            self.reset_child()
+            return FAILURE
+        if status is SUCCESS:
+            self.reset_child()
+            return RUNNING
+        if status is RUNNING:
+            return RUNNING
+        return self._status
+
+
+class RepeatNode(DecoratorNode):
+    """Repeat a successful child ``num_cycles`` times (-1: forever)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("num_cycles", int, description="Repeat a successful child up to N times. "
+                                                            "Use -1 to create an infinite loop.")]
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._count = 0
+        super().__init__(name, config)
+
+    def tick(self) -> NodeStatus:
+        try:
+            n = self.get_input("num_cycles")
+        except BTRuntimeError:
+            raise BTRuntimeError("Missing parameter [num_cycles] in RepeatNode") from None
+        loop = self._count < n or n == -1
+        self.set_status(RUNNING)
+        child = self.child
+        while loop:
+            prev = child._status
+            status = child.execute_tick()
+            if status is SUCCESS:
+                self._count += 1
+                loop = self._count < n or n == -1
+                self.reset_child()
+                if prev is IDLE and loop:
+                    self.config.wake_up.emit()
+                    return RUNNING
+            elif status is FAILURE:
+                self._count = 0
+                self.reset_child()
+                return FAILURE
+            elif status is RUNNING:
+                return RUNNING
+            elif status is SKIPPED:
+                self.reset_child()
+                return SKIPPED
+            else:
+                raise _idle(self)
+        self._count = 0
+        return SUCCESS
+
+    def halt(self) -> None:
+        self._count = 0
+        DecoratorNode.halt(self)
+
+
+class RetryNode(DecoratorNode):
+    """Retry a failing child up to ``num_attempts`` times (-1: forever)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("num_attempts", int, description="Execute again a failing child up to N times. "
+                                                              "Use -1 to create an infinite loop.")]
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._tries = 0
+        super().__init__(name, config)
+
+    def tick(self) -> NodeStatus:
+        try:
+            n = self.get_input("num_attempts")
+        except BTRuntimeError:
+            raise BTRuntimeError("Missing parameter [num_attempts] in RetryNode") from None
+        loop = self._tries < n or n == -1
+        self.set_status(RUNNING)
+        child = self.child
+        while loop:
+            prev = child._status
+            status = child.execute_tick()
+            if status is SUCCESS:
+                self._tries = 0
+                self.reset_child()
+                return SUCCESS
+            if status is FAILURE:
+                self._tries += 1
+                n = self.get_input("num_attempts", n)
+                loop = self._tries < n or n == -1
+                self.reset_child()
+                if prev is IDLE and loop:
+                    self.config.wake_up.emit()
+                    return RUNNING
+            elif status is RUNNING:
+                return RUNNING
+            elif status is SKIPPED:
+                self.reset_child()
+                return SKIPPED
+            else:
+                raise _idle(self)
+        self._tries = 0
+        return FAILURE
+
+    def halt(self) -> None:
+        self._tries = 0
+        DecoratorNode.halt(self)
+
+
+class RunOnceNode(DecoratorNode):
+    """Run the child to completion once for the life of the node; then skip (or repeat the
+    remembered status when ``then_skip`` is false)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("then_skip", bool, True,
+                           "If true, skip after the first execution, otherwise return the same "
+                           "NodeStatus returned once by the child.")]
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._done = False
+        self._returned = IDLE
+        super().__init__(name, config)
+
+    def tick(self) -> NodeStatus:
+        skip = self.get_input("then_skip", True)
+        if self._done:
+            return SKIPPED if skip else self._returned
+        self.set_status(RUNNING)
+        status = self.child.execute_tick()
+        if status is SUCCESS or status is FAILURE:
+            self._done = True
+            self._returned = status
+            self.reset_child()
+        return status
+
+
+class PreconditionNode(DecoratorNode):
+    """Tick the child only if the ``if`` script is true, else return ``else``; the script is
+    not re-checked while the child runs (and, as in BT.CPP, not after a halt either)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("if", str),
+                input_port("else", NodeStatus, FAILURE, "Return status if condition is false")]
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._script_text: str | None = None
+        self._script = None
+        self._children_running = False
+        super().__init__(name, config)
+        self._load()
+
+    def _load(self) -> None:
+        from ..script import compile_script
+
+        try:
+            text = self.get_input("if")
+        except BTRuntimeError:
+            raise BTRuntimeError("Missing parameter [if] in Precondition") from None
+        if text != self._script_text:
+            self._script = compile_script(text)
+            self._script_text = text
+
+    def tick(self) -> NodeStatus:
+        self._load()
+        try:
+            else_status = self.get_input("else")
+        except BTRuntimeError:
+            raise BTRuntimeError("Missing parameter [else] in Precondition") from None
+        cfg = self.config
+        if not self._children_running:
+            self._children_running = self._script.run_bool(cfg.blackboard, cfg.enums)
+        if not self._children_running:
+            return else_status
+        status = self.child.execute_tick()
+        if status is SUCCESS or status is FAILURE:
+            self.reset_child()
+            self._children_running = False
+        return status
+
+
+class SubTreeNode(DecoratorNode):
+    """The node standing for an expanded <SubTree>; its child is the subtree's root."""
+
+    node_type = NodeType.SUBTREE
+    subtree_id = ""
+
+    @classmethod
+    def provided_ports(cls):
+        # '_autoremap' is reserved for users; BT.CPP declares it for SubTree only.
+        return [PortInfo("_autoremap", PortDirection.INPUT, BOOL, False,
+                         "If true, all the ports with the same name will be remapped")]
+
+    def tick(self) -> NodeStatus:
+        if self._status is IDLE:
+            self.set_status(RUNNING)
+        status = self.child.execute_tick()
+        if status is SUCCESS or status is FAILURE:
+            self.reset_child()
+        return status

@@ -1,0 +1,74 @@
+"""ReactiveSequence and ReactiveFallback: re-tick every child from the first on every tick.
+
+When a child returns RUNNING every *other* child is halted/reset, so earlier conditions are
+re-evaluated fresh next tick and a previously running sibling is stopped (spec 4.2).
+"""
+
+from __future__ import annotations
+
+from ..errors import LogicError
+from ..node import ControlNode, NodeConfig
+from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
+
+
+class _ReactiveBase(ControlNode):
+    throw_if_multiple_running = False  # BT.CPP's process-wide EnableException flag
+    _stop_on: NodeStatus = FAILURE
+    _otherwise: NodeStatus = SUCCESS
+    _label = "ReactiveSequence"
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._running_child = -1
+        super().__init__(name, config)
+
+    @classmethod
+    def enable_exception(cls, enable: bool) -> None:
+        cls.throw_if_multiple_running = enable
+
+    def tick(self) -> NodeStatus:
+        if self._status is IDLE:
+            self._running_child = -1
+        if self._status is not RUNNING:
+            self.set_status(RUNNING)
+        stop_on = self._stop_on
+        all_skipped = True
+        children = self.children
+        for index, child in enumerate(children):
+            status = child.execute_tick()
+            if status is not SKIPPED:
+                all_skipped = False
+            if status is RUNNING:
+                for other in range(len(children)):
+                    if other != index:
+                        self.halt_child(other)
+                if self._running_child == -1:
+                    self._running_child = index
+                elif self.throw_if_multiple_running and self._running_child != index:
+                    raise LogicError(f"[{self._label}]: only a single child can return RUNNING.\n"
+                                     f"This throw can be disabled with {self._label}::EnableException(false)")
+                return RUNNING
+            if status is stop_on:
+                self.reset_children()
+                return stop_on
+            if status is SKIPPED:
+                self.halt_child(index)
+            elif status is IDLE:
+                raise LogicError(f"[{self.name}]: A children should not return IDLE")
+        self.reset_children()
+        return SKIPPED if all_skipped else self._otherwise
+
+    def halt(self) -> None:
+        self._running_child = -1
+        ControlNode.halt(self)
+
+
+class ReactiveSequenceNode(_ReactiveBase):
+    _stop_on = FAILURE
+    _otherwise = SUCCESS
+    _label = "ReactiveSequence"
+
+
+class ReactiveFallbackNode(_ReactiveBase):
+    _stop_on = SUCCESS
+    _otherwise = FAILURE
+    _label = "ReactiveFallback"

@@ -1,0 +1,205 @@
+"""A built tree: its nodes, blackboards and the tick loop (spec 2.12, 3.3, 3.4).
+
+``subtrees`` holds one record per expanded BehaviorTree in creation order (main tree first),
+each with its nodes in creation order; node uids start at 1 in depth-first pre-order. Groot2
+and the .btlog format depend on this order.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import fnmatch
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from .errors import LogicError
+from .status import FAILURE, IDLE, RUNNING, SUCCESS, NodeStatus
+from .timers import TimerQueue, WakeUpSignal
+
+if TYPE_CHECKING:
+    from .blackboard import Blackboard
+    from .node import StatusCallback, TreeNode, TreeNodeManifest
+
+_ONCE, _EXACTLY_ONCE, _WHILE_RUNNING = 0, 1, 2
+
+
+@dataclass
+class SubtreeRecord:
+    """One expanded BehaviorTree: its nodes (creation order), blackboard and instance path."""
+
+    tree_id: str
+    instance_name: str  # the subtree path; "" for the main tree
+    blackboard: Blackboard
+    nodes: list[TreeNode] = field(default_factory=list)
+
+
+class Tree:
+    """A behavior tree ready to tick. Built by ``BehaviorTreeFactory.create_tree*``."""
+
+    def __init__(self, subtrees: list[SubtreeRecord], manifests: dict[str, TreeNodeManifest],
+                 wake_up: WakeUpSignal, timers: TimerQueue, source_xml: str = "",
+                 clock_holder: list | None = None):
+        self.subtrees = subtrees
+        self.manifests = dict(manifests)
+        self.wake_up = wake_up
+        self.timers = timers
+        self.source_xml = source_xml
+        self._clock_holder = clock_holder if clock_holder is not None else [time.monotonic]
+        self._observers: list[tuple[StatusCallback, list[Callable[[], None]]]] = []
+
+    # -- structure -----------------------------------------------------------------------------
+    @property
+    def root_node(self) -> TreeNode:
+        if not self.subtrees or not self.subtrees[0].nodes:
+            raise LogicError("Empty Tree")
+        return self.subtrees[0].nodes[0]
+
+    @property
+    def root_blackboard(self) -> Blackboard:
+        return self.subtrees[0].blackboard
+
+    def nodes(self) -> Iterator[TreeNode]:
+        """Every node in uid order (the order of the subtree records is not uid order)."""
+        return iter(sorted((n for rec in self.subtrees for n in rec.nodes), key=lambda n: n.uid))
+
+    def apply_visitor(self, fn: Callable[[TreeNode], Any]) -> None:
+        """Depth-first pre-order through subtrees, like BT.CPP's applyRecursiveVisitor."""
+        def visit(node: TreeNode) -> None:
+            fn(node)
+            for child in node.children_nodes():
+                visit(child)
+        visit(self.root_node)
+
+    def get_nodes_by_path(self, pattern: str) -> list[TreeNode]:
+        """Nodes whose full path matches a wildcard pattern (``*`` and ``?``)."""
+        return [n for n in self.nodes() if fnmatch.fnmatchcase(n.full_path, pattern)]
+
+    def node_by_uid(self, uid: int) -> TreeNode | None:
+        for rec in self.subtrees:
+            for node in rec.nodes:
+                if node.uid == uid:
+                    return node
+        return None
+
+    # -- clock ---------------------------------------------------------------------------------
+    @property
+    def clock(self) -> Callable[[], float]:
+        return self._clock_holder[0]
+
+    def set_clock(self, clock: Callable[[], float]) -> None:
+        """Use ``clock`` (seconds) for timers and status timestamps, e.g. ``loop.time``."""
+        self._clock_holder[0] = clock
+        self.timers.clock = clock
+        for rec in self.subtrees:
+            for node in rec.nodes:
+                node.config.clock = clock
+
+    # -- observers -----------------------------------------------------------------------------
+    def add_status_observer(self, callback: StatusCallback) -> Callable[[], None]:
+        """Call ``callback(timestamp, node, previous, new)`` on every status change of every node."""
+        unsubs = [node.subscribe_to_status_change(callback) for rec in self.subtrees for node in rec.nodes]
+        entry = (callback, unsubs)
+        self._observers.append(entry)
+
+        def remove() -> None:
+            for unsub in unsubs:
+                unsub()
+            if entry in self._observers:
+                self._observers.remove(entry)
+
+        return remove
+
+    # -- ticking -------------------------------------------------------------------------------
+    def tick_once(self) -> NodeStatus:
+        """Tick the root; re-tick at once while RUNNING and a wake-up was emitted."""
+        return self._tick_root(_ONCE, 0.0)
+
+    def tick_exactly_once(self) -> NodeStatus:
+        """Tick the root exactly once, ignoring wake-up signals."""
+        return self._tick_root(_EXACTLY_ONCE, 0.0)
+
+    def tick_while_running(self, sleep: float = 0.01) -> NodeStatus:
+        """Tick until the root is no longer RUNNING, sleeping ``sleep`` s between ticks
+        (interrupted early by a wake-up signal or a due timer)."""
+        return self._tick_root(_WHILE_RUNNING, sleep)
+
+    def _tick_root(self, mode: int, sleep: float) -> NodeStatus:
+        root = self.root_node
+        timers = self.timers
+        wake_up = self.wake_up
+        status = IDLE
+        while status is IDLE or (mode == _WHILE_RUNNING and status is RUNNING):
+            if timers._heap:
+                timers.fire_due()
+            status = root.execute_tick()
+            if mode != _EXACTLY_ONCE:
+                while status is RUNNING and wake_up.check_and_clear():
+                    status = root.execute_tick()
+            if status is SUCCESS or status is FAILURE:
+                root.reset_status()
+            if status is RUNNING and sleep > 0:
+                self.sleep(sleep)
+        return status
+
+    def sleep(self, duration: float) -> bool:
+        """Block up to ``duration`` s; return True early if woken (wake-up or a timer fired)."""
+        clock = self.clock
+        end = clock() + duration
+        while True:
+            if self.timers.fire_due() or self.wake_up.is_set:
+                return True
+            now = clock()
+            if now >= end:
+                return False
+            nxt = self.timers.next_deadline()
+            wait = end - now if nxt is None else min(end, nxt) - now
+            time.sleep(max(0.0, min(wait, 0.001 if nxt is not None else wait)))
+
+    async def tick_while_running_async(self, period: float = 0.01) -> NodeStatus:
+        """Tick on the running event loop every ``period`` s until the root is not RUNNING.
+
+        Uses the loop's clock (so virtual time works) and awaits between ticks; a wake-up
+        signal (an async action finishing) cuts the wait short.
+        """
+        loop = asyncio.get_running_loop()
+        self.set_clock(loop.time)
+        woken = asyncio.Event()
+        self.wake_up.add_listener(woken.set)
+        try:
+            status = self.tick_once()
+            while status is RUNNING:
+                woken.clear()
+                nxt = self.timers.next_deadline()
+                wait = period if nxt is None else max(0.0, min(period, nxt - loop.time()))
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(woken.wait(), wait)
+                status = self.tick_once()
+            return status
+        except BaseException:
+            self.halt_tree()
+            raise
+        finally:
+            self.wake_up.remove_listener(woken.set)
+
+    def halt_tree(self) -> None:
+        """Halt the root, then halt every node (running ``_onHalted`` everywhere), reset the root."""
+        if not self.subtrees or not self.subtrees[0].nodes:
+            return
+        root = self.root_node
+        root.halt_node()
+        self.apply_visitor(lambda node: node.halt_node())
+        root.reset_status()
+
+    # -- misc ----------------------------------------------------------------------------------
+    def __repr__(self) -> str:
+        n = sum(len(rec.nodes) for rec in self.subtrees)
+        return f"<Tree {self.subtrees[0].tree_id if self.subtrees else '?'}: {n} nodes>"
+
+    def __enter__(self) -> Tree:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.halt_tree()

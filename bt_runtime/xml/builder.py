@@ -1,0 +1,310 @@
+"""Instantiating a registered tree: nodes, uids, paths, subtree blackboards (spec 2.6-2.12).
+
+Uids start at 1 and are assigned depth-first pre-order over the fully expanded tree: a node
+gets its uid before its children and a SubTree node's whole subtree is numbered before its
+next sibling. Everything that can be resolved once (port remapping strings, literal
+conversions, script compilation, blackboard entries for remapped ports) is done here so the
+tick itself stays cheap. Errors name the file, line and element.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import re
+import time
+from typing import TYPE_CHECKING, Any
+
+from lxml import etree
+
+from ..blackboard import Blackboard, Entry
+from ..errors import BehaviorTreeException, XMLLoadError
+from ..node import NodeConfig, TreeNode, TreeNodeManifest
+from ..ports import (
+    DOUBLE,
+    INT,
+    INT64,
+    STRING,
+    blackboard_key,
+    is_allowed_port_name,
+    is_strict_blackboard_pointer,
+    parse_bool,
+)
+from ..status import PortDirection
+from ..timers import TimerQueue, WakeUpSignal
+from ..tree import SubtreeRecord, Tree
+from .document import EXPLICIT_TAGS, TreeDefinition, suggest
+from .reader import XMLDocument, element_children
+
+if TYPE_CHECKING:
+    from ..factory import BehaviorTreeFactory
+
+PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")
+POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
+_INT_RE = re.compile(r"-?[0-9]+")
+_DOUBLE_RE = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
+
+
+def subtree_literal(text: str) -> Any:
+    """BT.CPP 4.10 typing of a literal SubTree port value: int, int64, double or string."""
+    if _INT_RE.fullmatch(text) and -(2**63) <= int(text) < 2**63:
+        return int(text)
+    if _DOUBLE_RE.fullmatch(text):
+        return float(text)
+    return text
+
+
+class TreeBuilder:
+    """Builds one Tree from the factory's registry."""
+
+    def __init__(self, factory: BehaviorTreeFactory):
+        self.factory = factory
+        self.registry = factory.registry
+        self._uid = 0
+        self._records: list[SubtreeRecord] = []
+        self._paths: set[str] = set()
+        self.wake_up = WakeUpSignal()
+        self.timers = TimerQueue()
+        self.clock_holder: list = [time.monotonic]
+
+    def build(self, tree_id: str, blackboard: Blackboard | None = None) -> Tree:
+        definition = self.registry.trees.get(tree_id)
+        if definition is None:
+            raise XMLLoadError(f"Can't find a tree with name: {tree_id}"
+                               f"{suggest(tree_id, list(self.registry.trees))}")
+        record = SubtreeRecord(tree_id, "", blackboard if blackboard is not None else Blackboard())
+        self._records.append(record)
+        self._build_node(definition.root_element, definition.document, record, "", [tree_id])
+        source = definition.document.text
+        return Tree(self._records, self.factory.manifests, self.wake_up, self.timers, source_xml=source,
+                    clock_holder=self.clock_holder)
+
+    # -- helpers -------------------------------------------------------------------------------
+    def _next_uid(self) -> int:
+        self._uid += 1
+        if self._uid > 0xFFFF:
+            raise XMLLoadError("Too many nodes: uids are 16-bit in BT.CPP (max 65535)")
+        return self._uid
+
+    def _err(self, doc: XMLDocument, elem: etree._Element, message: str) -> XMLLoadError:
+        return XMLLoadError(message, file=doc.file, line=doc.line_of(elem), element=elem.tag)
+
+    def _config(self, manifest: TreeNodeManifest, bb: Blackboard, uid: int, path: str,
+                doc: XMLDocument, elem: etree._Element) -> NodeConfig:
+        cfg = NodeConfig(bb, enums=self.factory.enums, manifest=manifest, uid=uid, path=path,
+                         context=self.factory.context)
+        cfg.wake_up = self.wake_up
+        cfg.timers = self.timers
+        cfg.clock = self.clock_holder[0]
+        cfg.source = (doc.file, doc.line_of(elem))
+        return cfg
+
+    def _compile_conditions(self, cfg: NodeConfig, attrs: dict[str, str], doc: XMLDocument,
+                            elem: etree._Element) -> None:
+        for names, target in ((PRE_CONDITIONS, cfg.pre_conditions), (POST_CONDITIONS, cfg.post_conditions)):
+            for attr in names:
+                code = attrs.get(attr)
+                if code is None:
+                    continue
+                from ..script import compile_script
+
+                try:
+                    target[attr] = compile_script(code)
+                except BehaviorTreeException as exc:
+                    raise self._err(doc, elem, f"{attr}: {exc}") from None
+
+    @staticmethod
+    def _check_instance_name(name: str) -> str | None:
+        for ch in name:
+            o = ord(ch)
+            if (o < 32 and ch not in "\t\n\r") or o == 127:
+                return ch
+        return None
+
+    # -- nodes ---------------------------------------------------------------------------------
+    def _build_node(self, elem: etree._Element, doc: XMLDocument, record: SubtreeRecord, prefix: str,
+                    stack: list[str]) -> TreeNode:
+        tag = elem.tag
+        if tag == "SubTree":
+            return self._build_subtree(elem, doc, record, prefix, stack)
+        type_id = elem.get("ID") if tag in EXPLICIT_TAGS else tag
+        manifests = self.factory.manifests
+        manifest = manifests.get(type_id)
+        if manifest is None:
+            raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
+        attrs = dict(elem.attrib)
+        name = attrs.get("name", type_id)
+        bad = self._check_instance_name(name)
+        if bad is not None:
+            raise self._err(doc, elem, f"The instance name '{name!r}' contains the forbidden character {bad!r}")
+        uid = self._next_uid()
+        path = prefix + name + (f"::{uid}" if name == type_id else "")
+        builder, manifest = self._substitute(type_id, name, path, manifest)
+        cfg = self._config(manifest, record.blackboard, uid, path, doc, elem)
+        given = self._assign_ports(cfg, manifest, attrs, doc, elem)
+        self._fill_defaults(cfg, manifest, given)
+        self._check_literals_and_create_entries(cfg, manifest, given, record.blackboard, doc, elem)
+        self._compile_conditions(cfg, attrs, doc, elem)
+        try:
+            node = builder(name, cfg)
+        except XMLLoadError:
+            raise
+        except BehaviorTreeException as exc:
+            raise self._err(doc, elem, str(exc)) from None
+        except Exception as exc:
+            raise self._err(doc, elem, f"creating node '{path}' [{type_id}] failed: "
+                                       f"{type(exc).__name__}: {exc}") from exc
+        record.nodes.append(node)
+        for child_elem in element_children(elem):
+            child = self._build_node(child_elem, doc, record, prefix, stack)
+            node.add_child(child)
+        return node
+
+    def _substitute(self, type_id: str, name: str, path: str,
+                    manifest: TreeNodeManifest) -> tuple[Any, TreeNodeManifest]:
+        factory = self.factory
+        for pattern, rule in factory.substitution_rules:
+            if pattern in (name, type_id) or fnmatch.fnmatchcase(path, pattern):
+                builder, sub_manifest = factory.substitution_builder(rule, manifest)
+                return builder, sub_manifest
+        return factory.builders[type_id], manifest
+
+    def _assign_ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str],
+                      doc: XMLDocument, elem: etree._Element) -> list[str]:
+        given: list[str] = []
+        for attr, value in attrs.items():
+            if attr in ("ID", "name", "_autoremap") or attr in PRE_CONDITIONS or attr in POST_CONDITIONS:
+                continue
+            if not is_allowed_port_name(attr):
+                cfg.other_attributes[attr] = value
+                continue
+            port = manifest.ports.get(attr)
+            if port is None:
+                line = doc.line_of(elem)
+                ports = list(manifest.ports)
+                raise self._err(doc, elem, f"a port with name [{attr}] is found in the XML (<{elem.tag}>, "
+                                           f"line {line}) but not in the providedPorts() of its registered "
+                                           f"node type.{suggest(attr, ports) or (' Ports: ' + ', '.join(ports) if ports else ' It has no ports.')}")
+            if port.direction is not PortDirection.OUTPUT:
+                cfg.input_ports[attr] = value
+            if port.direction is not PortDirection.INPUT:
+                cfg.output_ports[attr] = value
+            given.append(attr)
+        return given
+
+    @staticmethod
+    def _fill_defaults(cfg: NodeConfig, manifest: TreeNodeManifest, given: list[str]) -> None:
+        for name, port in manifest.ports.items():
+            if name in given or not port.has_default:
+                continue
+            text = port.default_string()
+            if port.direction is not PortDirection.OUTPUT:
+                cfg.input_ports[name] = text
+            if port.direction is not PortDirection.INPUT and blackboard_key(text, name) is not None:
+                cfg.output_ports[name] = text
+
+    def _check_literals_and_create_entries(self, cfg: NodeConfig, manifest: TreeNodeManifest,
+                                           given: list[str], bb: Blackboard, doc: XMLDocument,
+                                           elem: etree._Element) -> None:
+        for name in given:
+            port = manifest.ports[name]
+            raw = cfg.input_ports.get(name, cfg.output_ports.get(name, ""))
+            ptype = port.type
+            if is_strict_blackboard_pointer(raw) or raw in ("=", "{=}"):
+                key = blackboard_key(raw, name)
+                existing = bb.get_entry(key)
+                if existing is not None:
+                    et = existing.type
+                    if (et.strongly_typed and ptype.strongly_typed and et != ptype
+                            and et.kind != "string"):
+                        raise self._err(doc, elem, f"The creation of the tree failed because the port "
+                                                   f"[{name}] was initially created with type [{et.name}] "
+                                                   f"and, later type [{ptype.name}] was used somewhere else.")
+                else:
+                    try:
+                        bb.create_entry(key, ptype)
+                    except BehaviorTreeException as exc:
+                        raise self._err(doc, elem, str(exc)) from None
+            elif ptype.strongly_typed and ptype.has_converter and port.direction is not PortDirection.OUTPUT:
+                try:
+                    ptype.from_string(raw, cfg.enums)
+                except BehaviorTreeException:
+                    raise self._err(doc, elem, f'The port with name "{name}" and value "{raw}" can not be '
+                                               f"converted to {ptype.name}") from None
+
+    # -- subtrees ------------------------------------------------------------------------------
+    def _build_subtree(self, elem: etree._Element, doc: XMLDocument, record: SubtreeRecord, prefix: str,
+                       stack: list[str]) -> TreeNode:
+        sub_id = elem.get("ID")
+        definition: TreeDefinition | None = self.registry.trees.get(sub_id)
+        if definition is None:
+            raise self._err(doc, elem, f"SubTree ID '{sub_id}' is not a registered BehaviorTree"
+                                       f"{suggest(sub_id or '', list(self.registry.trees))}")
+        if sub_id in stack:
+            raise self._err(doc, elem, f"Recursive behavior tree cycle detected: tree '{sub_id}' references "
+                                       "itself (directly or indirectly)")
+        manifest = self.factory.manifests["SubTree"]
+        uid = self._next_uid()
+        name_attr = elem.get("name")
+        path = prefix + (name_attr if name_attr is not None else f"{sub_id}::{uid}")
+        if path in self._paths:
+            raise self._err(doc, elem, f"Duplicate SubTree path detected: '{path}'. Use the 'name' attribute "
+                                       "to give each SubTree instance a unique name.")
+        self._paths.add(path)
+        cfg = self._config(manifest, record.blackboard, uid, path, doc, elem)
+        attrs = dict(elem.attrib)
+        self._compile_conditions(cfg, attrs, doc, elem)
+
+        child_bb = Blackboard(parent=record.blackboard)
+        remap: dict[str, str] = {}
+        autoremap = False
+        for attr, value in attrs.items():
+            if value == "{=}":
+                value = "{" + attr + "}"
+            if attr == "_autoremap":
+                try:
+                    autoremap = parse_bool(value)
+                except BehaviorTreeException:
+                    raise self._err(doc, elem, f"_autoremap must be true or false, got '{value}'") from None
+                continue
+            if not is_allowed_port_name(attr):
+                continue
+            remap[attr] = value
+        child_bb.enable_auto_remapping(autoremap)
+        model = self.registry.subtree_models.get(sub_id)
+        if model and not autoremap:
+            for port_name, port in model.items():
+                if port_name in remap:
+                    continue
+                if not port.has_default:
+                    raise self._err(doc, elem, f"In the <TreeNodesModel> the <Subtree ID=\"{sub_id}\"> is "
+                                               f"defining a mandatory port called [{port_name}], but you are "
+                                               "not remapping it")
+                remap[port_name] = port.default_string()
+        for internal, value in remap.items():
+            key = blackboard_key(value, internal) if is_strict_blackboard_pointer(value.strip(" ")) else None
+            if key is not None:
+                child_bb.add_subtree_remapping(internal, key)
+            else:
+                literal = subtree_literal(value)
+                entry_type = (STRING if isinstance(literal, str) else
+                              DOUBLE if isinstance(literal, float) else
+                              INT if -(2**31) <= literal < 2**31 else INT64)
+                entry = Entry(entry_type)
+                entry.write(literal)
+                child_bb.local_entries()[internal] = entry
+        cfg.input_ports = remap
+        cfg.other_attributes = {k: v for k, v in attrs.items() if k not in remap and k not in ("ID", "name")
+                                and k not in PRE_CONDITIONS and k not in POST_CONDITIONS}
+        cfg.other_attributes.setdefault("_autoremap", "true" if autoremap else "false")
+        try:
+            node = self.factory.builders["SubTree"](name_attr or sub_id, cfg)
+        except BehaviorTreeException as exc:
+            raise self._err(doc, elem, str(exc)) from None
+        node.subtree_id = sub_id
+        record.nodes.append(node)
+        sub_record = SubtreeRecord(sub_id, path, child_bb)
+        self._records.append(sub_record)
+        root = self._build_node(definition.root_element, definition.document, sub_record, path + "/",
+                                [*stack, sub_id])
+        node.set_child(root)
+        return node

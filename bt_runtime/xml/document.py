@@ -1,0 +1,275 @@
+"""Registering tree documents: root checks, includes, TreeNodesModel, per-tree validation.
+
+This is BT.CPP's XMLParser minus instantiation (see ``builder.py``): documents are checked
+when they are loaded (spec 2.2-2.4, 2.8, 2.11), so a bad file fails at load time with its
+file, line and element, before anything is built.
+"""
+
+from __future__ import annotations
+
+import difflib
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from lxml import etree
+
+from ..errors import XMLLoadError
+from ..ports import PortInfo, find_forbidden_char, input_port, port_type
+from ..status import NodeType, PortDirection
+from .reader import XMLDocument, element_children, parse_xml_text, read_xml_file
+from .v3 import BTFormatWarning, is_v3, translate_v3
+
+if TYPE_CHECKING:
+    from ..factory import BehaviorTreeFactory
+
+EXPLICIT_TAGS = ("Action", "Condition", "Control", "Decorator")
+MAX_DEPTH = 256
+_PORT_TAGS = {"input_port": PortDirection.INPUT, "output_port": PortDirection.OUTPUT,
+              "inout_port": PortDirection.INOUT}
+
+
+@dataclass
+class TreeDefinition:
+    """A registered <BehaviorTree>: its single root element and where it came from."""
+
+    tree_id: str
+    element: etree._Element  # the <BehaviorTree> element
+    document: XMLDocument
+
+    @property
+    def root_element(self) -> etree._Element:
+        return element_children(self.element)[0]
+
+
+@dataclass
+class NodeModel:
+    """A <TreeNodesModel> entry: a node type known by its ports only (e.g. Nav2's nodes)."""
+
+    registration_id: str
+    node_type: NodeType
+    ports: dict[str, PortInfo] = field(default_factory=dict)
+    description: str = ""
+
+
+@dataclass
+class LoadResult:
+    new_tree_ids: list[str]
+    all_tree_ids: list[str]  # every <BehaviorTree> of the document, new or replaced
+    main_tree: str | None
+    document: XMLDocument
+
+
+def suggest(name: str, candidates: list[str]) -> str:
+    close = difflib.get_close_matches(name, candidates, n=3, cutoff=0.6)
+    if not close:
+        close = [c for c in candidates if c.lower().startswith(name[:3].lower())][:3] if name else []
+    return f" (did you mean: {', '.join(close)}?)" if close else ""
+
+
+def check_model_name(name: str, what: str, doc: XMLDocument, elem: etree._Element) -> None:
+    if not name:
+        raise XMLLoadError(f"{what} name must not be empty", file=doc.file, line=doc.line_of(elem),
+                           element=elem.tag)
+    if name in ("Root", "root"):
+        raise XMLLoadError(f"{what} name '{name}' is reserved", file=doc.file, line=doc.line_of(elem),
+                           element=elem.tag)
+    bad = find_forbidden_char(name)
+    if bad is not None:
+        raise XMLLoadError(f"{what} name '{name}' contains the forbidden character {bad!r}",
+                           file=doc.file, line=doc.line_of(elem), element=elem.tag)
+
+
+class TreeRegistry:
+    """The factory's registry of tree definitions and models, fed by documents."""
+
+    def __init__(self, factory: BehaviorTreeFactory):
+        self.factory = factory
+        self.trees: dict[str, TreeDefinition] = {}
+        self.subtree_models: dict[str, dict[str, PortInfo]] = {}
+        self.node_models: dict[str, NodeModel] = {}
+        self.first_main_tree: str | None = None
+        self._documents_opened = 0
+        self._anonymous = 0
+
+    # -- entry points --------------------------------------------------------------------------
+    def load_text(self, text: str | bytes, file: str | None = None) -> LoadResult:
+        doc = parse_xml_text(text, file=file)
+        return self._load(doc, [])
+
+    def load_file(self, path: str | Path) -> LoadResult:
+        doc = read_xml_file(path)
+        return self._load(doc, [str(Path(path).resolve())])
+
+    def clear(self) -> None:
+        self.trees.clear()
+        self.subtree_models.clear()
+        self.first_main_tree = None
+        self._documents_opened = 0
+
+    # -- loading -------------------------------------------------------------------------------
+    def _err(self, doc: XMLDocument, elem: etree._Element | None, message: str) -> XMLLoadError:
+        return XMLLoadError(message, file=doc.file, line=doc.line_of(elem) if elem is not None else None,
+                            element=elem.tag if elem is not None else None)
+
+    def _load(self, doc: XMLDocument, include_stack: list[str]) -> LoadResult:
+        root = doc.root
+        if root.tag != "root":
+            raise self._err(doc, root, "The XML must have a root node called <root>")
+        if is_v3(root):
+            if root.get("BTCPP_format") is None and not _looks_v3(root):
+                warnings.warn(f"{doc.file or '<text>'}: The first tag of the XML (<root>) should contain "
+                              'the attribute [BTCPP_format="4"]', BTFormatWarning, stacklevel=3)
+            translate_v3(root, doc.file)
+        self._documents_opened += 1
+        main_tree = root.get("main_tree_to_execute")
+        if self._documents_opened == 1 and self.first_main_tree is None:
+            self.first_main_tree = main_tree
+
+        children = element_children(root)
+        # Includes first, recursively (their trees are registered in the same registry).
+        for child in children:
+            if child.tag == "include":
+                self._load_include(doc, child, include_stack)
+
+        models = [c for c in children if c.tag == "TreeNodesModel"]
+        if len(models) > 1:
+            raise self._err(doc, models[1], "Only a single node <TreeNodesModel> is supported")
+        if models:
+            self._load_models(doc, models[0])
+
+        tree_elements = [c for c in children if c.tag == "BehaviorTree"]
+        before = set(self.trees)
+        ids: list[str] = []
+        for bt in tree_elements:
+            tree_id = bt.get("ID")
+            if tree_id is None:
+                if len(children) != 1:
+                    raise self._err(doc, bt, "The tag <BehaviorTree> must have the attribute [ID]")
+                tree_id = f"BehaviorTree_{self._anonymous}"
+                self._anonymous += 1
+            else:
+                check_model_name(tree_id, "BehaviorTree ID", doc, bt)
+            if tree_id in self.factory.manifests:
+                raise self._err(doc, bt, "The attribute [ID] of tag <BehaviorTree> must not use the name "
+                                         "of a registered Node")
+            if len(element_children(bt)) != 1:
+                raise self._err(doc, bt, f"The tag <BehaviorTree> with ID '{tree_id}' must have exactly 1 child")
+            ids.append(tree_id)
+
+        # Validate every tree before registering any, so a bad document changes nothing.
+        for bt in tree_elements:
+            self._check_node(doc, element_children(bt)[0], 1, parent=None)
+        for bt, tree_id in zip(tree_elements, ids):
+            self.trees[tree_id] = TreeDefinition(tree_id, bt, doc)
+        new_ids = [i for i in ids if i not in before]
+        return LoadResult(new_ids, ids, main_tree, doc)
+
+    def _load_include(self, doc: XMLDocument, elem: etree._Element, include_stack: list[str]) -> None:
+        path_attr = elem.get("path")
+        if path_attr is None:
+            raise self._err(doc, elem, "Invalid <include> tag: missing 'path' attribute")
+        if elem.get("ros_pkg") is not None and not Path(path_attr).is_absolute():
+            raise self._err(doc, elem, "<include ros_pkg=...> needs ROS package lookup, which bt_runtime "
+                                       "does not do; use a path relative to this file")
+        base = doc.directory.resolve()
+        target = (base / path_attr).resolve()
+        if base != target and base not in target.parents:
+            raise self._err(doc, elem, f"include path '{path_attr}' resolves outside the folder of the "
+                                       f"including file ({base}); refused")
+        if str(target) in include_stack:
+            raise self._err(doc, elem, f"include cycle: '{path_attr}' is already being loaded")
+        if not target.is_file():
+            raise self._err(doc, elem, f"included file not found: {target}")
+        included = read_xml_file(target)
+        self._load(included, [*include_stack, str(target)])
+
+    def _load_models(self, doc: XMLDocument, models: etree._Element) -> None:
+        for entry in element_children(models):
+            node_type = NodeType.from_xml_name(entry.tag)
+            model_id = entry.get("ID")
+            if entry.tag == "SubTree" and model_id is None:
+                raise self._err(doc, entry, "Missing attribute 'ID' in SubTree element within TreeNodesModel")
+            if model_id is None:
+                continue
+            ports: dict[str, PortInfo] = {}
+            for port_elem in element_children(entry):
+                direction = _PORT_TAGS.get(port_elem.tag)
+                if direction is None:
+                    continue
+                name = port_elem.get("name")
+                if not name:
+                    raise self._err(doc, port_elem, f"A port of model '{model_id}' has no [name] attribute")
+                bad = find_forbidden_char(name)
+                if bad is not None or name[0].isdigit():
+                    raise self._err(doc, port_elem, f"Invalid port name '{name}' in model '{model_id}'")
+                description = port_elem.get("description") or (port_elem.text or "").strip()
+                type_name = port_elem.get("type") or ""
+                ptype = port_type(type_name) if type_name else port_type(None)
+                default = port_elem.get("default")
+                info = input_port(name, ptype, description=description) if default is None else \
+                    input_port(name, ptype, default=default, description=description)
+                ports[name] = PortInfo(info.name, direction, info.type, info.default, info.description)
+            if entry.tag == "SubTree":
+                self.subtree_models[model_id] = ports
+            else:
+                self.node_models[model_id] = NodeModel(model_id, node_type, ports,
+                                                       (entry.get("description") or "").strip())
+
+    # -- per-tree validation (spec 2.8) ----------------------------------------------------------
+    def _check_node(self, doc: XMLDocument, elem: etree._Element, depth: int,
+                    parent: etree._Element | None) -> None:
+        if depth > MAX_DEPTH:
+            raise self._err(doc, elem, f"Maximum XML nesting depth exceeded (limit: {MAX_DEPTH}). "
+                                       "The XML is too deeply nested.")
+        manifests = self.factory.manifests
+        tag = elem.tag
+        children = element_children(elem)
+        if tag == "SubTree":
+            if children:
+                raise self._err(doc, elem, f"<SubTree> with ID '{elem.get('ID')}' should not have any child")
+            sub_id = elem.get("ID")
+            if sub_id is None:
+                raise self._err(doc, elem, "The tag <SubTree> must have the attribute [ID]")
+            if sub_id in manifests:
+                raise self._err(doc, elem, "The attribute [ID] of tag <SubTree> must not use the name of "
+                                           "a registered Node")
+            return
+        if tag in EXPLICIT_TAGS:
+            type_id = elem.get("ID")
+            if type_id is None:
+                raise self._err(doc, elem, f"The tag <{tag}> must have the attribute [ID]")
+        else:
+            type_id = tag
+            if "ID" in elem.attrib:
+                raise self._err(doc, elem, f"Attribute [ID] is not allowed in <{tag}>")
+        if parent is not None and parent.tag == "ReactiveSequence" and tag in EXPLICIT_TAGS:
+            raise self._err(doc, elem, f"Unknown node type: {tag} (BehaviorTree.CPP rejects explicit "
+                                       "<Action ID=...> children of a ReactiveSequence; use the compact "
+                                       f"form <{type_id}/>)")
+        manifest = manifests.get(type_id)
+        if manifest is None:
+            raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
+        node_type = manifest.node_type
+        if node_type is NodeType.DECORATOR and len(children) != 1:
+            raise self._err(doc, elem, f"The node '{type_id}' must have exactly 1 child")
+        if node_type is NodeType.CONTROL:
+            if not children:
+                raise self._err(doc, elem, f"The node '{type_id}' must have 1 or more children")
+            if type_id == "TryCatch" and len(children) < 2:
+                raise self._err(doc, elem, "The node 'TryCatch' must have at least 2 children")
+        if node_type in (NodeType.ACTION, NodeType.CONDITION) and children:
+            raise self._err(doc, elem, f"The node '{type_id}' must not have any child")
+        for child in children:
+            self._check_node(doc, child, depth + 1, elem)
+
+
+def _looks_v3(root: etree._Element) -> bool:
+    """A file without BTCPP_format that uses v3-only names (then translation warns instead)."""
+    from .v3 import RENAMED_NODES
+    for elem in root.iter():
+        if isinstance(elem.tag, str) and (elem.tag in RENAMED_NODES or elem.get("ID") in RENAMED_NODES
+                                          or "__shared_blackboard" in elem.attrib):
+            return True
+    return False

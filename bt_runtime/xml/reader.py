@@ -1,0 +1,157 @@
+"""Safe, lenient XML reading: what tinyxml2 (BT.CPP's parser) accepts, nothing dangerous.
+
+* Safe: lxml with entity resolution, DTD loading and network access off; any DOCTYPE or
+  ENTITY declaration is refused outright (no billion laughs), and so are files over
+  ``MAX_XML_BYTES``.
+* Lenient like tinyxml2: a raw ``<`` or an ``&`` that does not start an entity is accepted
+  inside attribute values (``_skipIf="A<2"``, ``code="a && b"``), and literal newlines and
+  tabs in attribute values are kept (a conforming parser would turn them into spaces). Only
+  start tags are rewritten, and only when needed; line numbers in errors and on elements are
+  mapped back to the original text.
+"""
+
+from __future__ import annotations
+
+import bisect
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+from ..errors import XMLLoadError
+
+MAX_XML_BYTES = 16 * 1024 * 1024
+
+_START_TAG = re.compile(r"""<[A-Za-z_:][-\w:.]*(?:\s+[^\s=/>]+\s*=\s*(?:"[^"]*"|'[^']*'))*\s*/?>""")
+_ATTR_VALUE = re.compile(r"""=(\s*)("[^"]*"|'[^']*')""")
+_VALID_ENTITY = re.compile(r"&(?:amp|lt|gt|quot|apos|#[0-9]+|#x[0-9a-fA-F]+);")
+_NEEDS_FIX = re.compile(r"""=\s*(?:"[^"]*[<&\n\t\r][^"]*"|'[^']*[<&\n\t\r][^']*')""")
+_DECLARATION = re.compile(r"^\ufeff?\s*<\?xml[^>]*\?>")
+_DTD = re.compile(r"<!(DOCTYPE|ENTITY)", re.IGNORECASE)
+
+
+@dataclass
+class XMLDocument:
+    """A parsed document: its root element, where it came from, and a line-number map."""
+
+    root: etree._Element
+    file: str | None
+    text: str
+    _line_starts: list[int] = field(default_factory=list)  # processed line numbers of fixed tags
+    _line_removed: list[int] = field(default_factory=list)  # cumulative newlines removed by then
+
+    def line_of(self, element: etree._Element) -> int | None:
+        """The element's line in the original text."""
+        line = element.sourceline
+        if line is None:
+            return None
+        return self.original_line(line)
+
+    def original_line(self, processed_line: int) -> int:
+        idx = bisect.bisect_left(self._line_starts, processed_line) - 1
+        return processed_line + (self._line_removed[idx] if idx >= 0 else 0)
+
+    @property
+    def directory(self) -> Path:
+        return Path(self.file).resolve().parent if self.file else Path.cwd()
+
+
+def _fix_attribute_value(quoted: str) -> str:
+    quote, body = quoted[0], quoted[1:-1]
+    out = []
+    pos = 0
+    for m in re.finditer(r"[<&\r\n\t]", body):
+        out.append(body[pos:m.start()])
+        ch = m.group(0)
+        if ch == "<":
+            out.append("&lt;")
+        elif ch == "&":
+            out.append("&" if _VALID_ENTITY.match(body, m.start()) else "&amp;")
+        elif ch == "\r":
+            out.append("" if body[m.end():m.end() + 1] == "\n" else "&#10;")
+        elif ch == "\n":
+            out.append("&#10;")
+        else:
+            out.append("&#9;")
+        pos = m.end()
+    out.append(body[pos:])
+    return quote + "".join(out) + quote
+
+
+def _make_lenient(text: str) -> tuple[str, list[int], list[int]]:
+    """Escape what tinyxml2 tolerates inside attribute values, tracking removed newlines."""
+    starts: list[int] = []
+    removed: list[int] = []
+    state = {"removed": 0, "orig_line": 1, "orig_pos": 0}
+
+    def fix_tag(m: re.Match[str]) -> str:
+        tag = m.group(0)
+        if not _NEEDS_FIX.search(tag):
+            return tag
+        state["orig_line"] += text.count("\n", state["orig_pos"], m.start())
+        state["orig_pos"] = m.start()
+        fixed = _ATTR_VALUE.sub(lambda a: "=" + a.group(1) + _fix_attribute_value(a.group(2)), tag)
+        lost = tag.count("\n") - fixed.count("\n")
+        if lost:
+            state["removed"] += lost
+            end_processed_line = (state["orig_line"] + tag.count("\n")) - state["removed"]
+            starts.append(end_processed_line)
+            removed.append(state["removed"])
+        return fixed
+
+    return _START_TAG.sub(fix_tag, text), starts, removed
+
+
+def read_xml_file(path: str | Path) -> XMLDocument:
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise XMLLoadError(f"Cannot read the file: {exc.strerror or exc}", file=str(path)) from None
+    if size > MAX_XML_BYTES:
+        raise XMLLoadError(f"File too large ({size} bytes, limit {MAX_XML_BYTES}); refused",
+                           file=str(path))
+    raw = p.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise XMLLoadError(f"The file is not valid UTF-8 ({exc.reason} at byte {exc.start})",
+                           file=str(path)) from None
+    return parse_xml_text(text, file=str(path))
+
+
+def parse_xml_text(text: str | bytes, file: str | None = None) -> XMLDocument:
+    """Parse BT.CPP tree XML safely and leniently. Raises XMLLoadError with file and line."""
+    if isinstance(text, bytes):
+        if len(text) > MAX_XML_BYTES:
+            raise XMLLoadError(f"XML too large ({len(text)} bytes, limit {MAX_XML_BYTES}); refused", file=file)
+        text = text.decode("utf-8-sig")
+    if len(text) > MAX_XML_BYTES:
+        raise XMLLoadError(f"XML too large ({len(text)} characters, limit {MAX_XML_BYTES}); refused",
+                           file=file)
+    dtd = _DTD.search(text)
+    if dtd:
+        line = text.count("\n", 0, dtd.start()) + 1
+        raise XMLLoadError("DOCTYPE and ENTITY declarations are not allowed in tree files", file=file,
+                           line=line)
+    decl = _DECLARATION.match(text)
+    if decl:
+        text = "\n" * decl.group(0).count("\n") + text[decl.end():]
+    if not text.strip():
+        raise XMLLoadError("Error parsing the XML: empty document", file=file, line=1)
+    fixed, starts, removed = _make_lenient(text)
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
+                             huge_tree=False, remove_comments=True, remove_pis=True)
+    try:
+        root = etree.fromstring(fixed.encode("utf-8"), parser)
+    except etree.XMLSyntaxError as exc:
+        doc = XMLDocument(etree.Element("root"), file, text, starts, removed)
+        line = doc.original_line(exc.lineno) if exc.lineno else None
+        raise XMLLoadError(f"Error parsing the XML: {exc.msg}", file=file, line=line) from None
+    return XMLDocument(root, file, text, starts, removed)
+
+
+def element_children(element: etree._Element) -> list[etree._Element]:
+    """Child elements, ignoring comments and processing instructions."""
+    return [c for c in element if isinstance(c.tag, str)]
