@@ -13,6 +13,7 @@ tick, cancelled on halt), ControlNode, DecoratorNode. A tick never awaits.
 from __future__ import annotations
 
 import asyncio
+import functools
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -41,14 +42,19 @@ class NodeConfig:
     def __init__(self, blackboard: Blackboard | None = None, *, input_ports: dict[str, str] | None = None,
                  output_ports: dict[str, str] | None = None, enums: dict[str, int] | None = None,
                  manifest: TreeNodeManifest | None = None, uid: int = 0, path: str = "",
-                 context: Any = None):
-        from .blackboard import Blackboard
-        from .timers import TimerQueue, WakeUpSignal
-
-        self.blackboard = blackboard if blackboard is not None else Blackboard()
+                 context: Any = None, wake_up: WakeUpSignal | None = None,
+                 timers: TimerQueue | None = None, clock: Callable[[], float] | None = None):
+        if blackboard is None:
+            from .blackboard import Blackboard
+            blackboard = Blackboard()
+        if wake_up is None or timers is None:
+            from .timers import TimerQueue, WakeUpSignal
+            wake_up = wake_up or WakeUpSignal()
+            timers = timers or TimerQueue()
+        self.blackboard = blackboard
         self.enums = enums if enums is not None else {}
-        self.input_ports = input_ports or {}
-        self.output_ports = output_ports or {}
+        self.input_ports = input_ports if input_ports is not None else {}
+        self.output_ports = output_ports if output_ports is not None else {}
         self.manifest = manifest
         self.uid = uid
         self.path = path
@@ -56,9 +62,9 @@ class NodeConfig:
         self.post_conditions: dict[str, Any] = {}
         self.other_attributes: dict[str, str] = {}
         self.context = context
-        self.wake_up: WakeUpSignal = WakeUpSignal()
-        self.timers: TimerQueue = TimerQueue()
-        self.clock: Callable[[], float] = self.timers.clock
+        self.wake_up: WakeUpSignal = wake_up
+        self.timers: TimerQueue = timers
+        self.clock: Callable[[], float] = clock or timers.clock
         self.registration_id = manifest.registration_id if manifest else ""
         self.source: tuple[str | None, int | None] = (None, None)  # (file, line) for messages
 
@@ -83,10 +89,20 @@ class TreeNodeManifest:
 
 
 class TreeNode:
-    """Base of every node. Subclasses implement ``tick()`` (and ``halt()`` when stateful)."""
+    """Base of every node. Subclasses implement ``tick()`` (and ``halt()`` when stateful).
+
+    ``_fast`` is what a parent calls to tick this node: the bare ``tick`` when the node has
+    no pre/post-condition scripts and no hooks (the parent then stores the status itself,
+    saving a Python call per node), otherwise the full ``execute_tick``. Classes whose BT.CPP
+    ``executeTick`` does extra work (decorators, sync actions) set ``_bare_tick_ok = False``.
+    """
+
+    __slots__ = ("name", "config", "_status", "_subscribers", "_pre_hook", "_post_hook", "_monitor",
+                 "_input_cache", "_fast", "__dict__", "__weakref__")
 
     node_type: ClassVar[NodeType] = NodeType.UNDEFINED
     description: ClassVar[str] = ""
+    _bare_tick_ok: ClassVar[bool] = True
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self.name = name
@@ -195,8 +211,13 @@ class TreeNode:
         if (cfg.pre_conditions or cfg.post_conditions or self._pre_hook or self._post_hook
                 or self._monitor):
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
+            self._fast = self._execute_tick_full
         else:
             self.__dict__.pop("execute_tick", None)
+            self._fast = self._bare_tick() if self._bare_tick_ok else self.execute_tick
+
+    def _bare_tick(self) -> Callable[[], NodeStatus]:
+        return self.tick
 
     def refresh_conditions(self) -> None:
         """Re-select the tick path after pre/post-conditions were set on the config."""
@@ -423,6 +444,8 @@ class ConditionNode(LeafNode):
 class SyncActionNode(ActionNodeBase):
     """An action that completes within one tick; returning RUNNING is a LogicError."""
 
+    _bare_tick_ok = False  # the RUNNING check lives in execute_tick
+
     def execute_tick(self) -> NodeStatus:
         status = TreeNode.execute_tick(self)
         if status is RUNNING:
@@ -443,10 +466,15 @@ class SimpleActionNode(SyncActionNode):
         self._fn = fn
         super().__init__(name, config)
 
+    _bare_tick_ok = True  # tick() makes the RUNNING check itself
+
     def tick(self) -> NodeStatus:
         if self._status is IDLE:
             self.set_status(RUNNING)
-        return self._fn(self)
+        status = self._fn(self)
+        if status is RUNNING:
+            raise LogicError("SyncActionNode MUST never return RUNNING")
+        return status
 
 
 class SimpleConditionNode(ConditionNode):
@@ -458,6 +486,9 @@ class SimpleConditionNode(ConditionNode):
 
     def tick(self) -> NodeStatus:
         return self._fn(self)
+
+    def _bare_tick(self) -> Callable[[], NodeStatus]:
+        return functools.partial(self._fn, self)  # one Python frame per tick instead of two
 
 
 class StatefulActionNode(ActionNodeBase):
@@ -586,6 +617,7 @@ class AsyncActionNode(ActionNodeBase):
 class ControlNode(TreeNode):
     """A node with an ordered list of children."""
 
+    __slots__ = ("children",)
     node_type = NodeType.CONTROL
 
     def __init__(self, name: str, config: NodeConfig | None = None):
@@ -599,10 +631,16 @@ class ControlNode(TreeNode):
         return self.children
 
     def reset_children(self) -> None:
+        """Halt RUNNING children, then set every child IDLE (BT.CPP resetChildren)."""
         for child in self.children:
-            if child._status is RUNNING:
-                child.halt_node()
-            child.reset_status()
+            status = child._status
+            if status is not IDLE:
+                if status is RUNNING:
+                    child.halt_node()
+                if child._subscribers:
+                    child.reset_status()
+                else:
+                    child._status = IDLE
 
     def halt_child(self, index: int) -> None:
         child = self.children[index]
@@ -618,7 +656,9 @@ class ControlNode(TreeNode):
 class DecoratorNode(TreeNode):
     """A node with exactly one child; a completed child is reset after the tick."""
 
+    __slots__ = ("child",)
     node_type = NodeType.DECORATOR
+    _bare_tick_ok = False  # execute_tick resets a completed child afterwards
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self.child: TreeNode | None = None
@@ -677,6 +717,33 @@ class SimpleDecoratorNode(DecoratorNode):
 
     def tick(self) -> NodeStatus:
         return self._fn(self.child.execute_tick(), self)
+
+
+def store_child_status(child: TreeNode, status: NodeStatus) -> None:
+    """What a parent does after calling ``child._fast()``: store the result like executeTick.
+
+    The hot control loops inline this (see sequences.py, reactive.py); keep them in sync.
+    """
+    if status is not child._status:
+        if status is not SKIPPED:
+            if status is IDLE or child._subscribers:
+                child.set_status(status)
+            else:
+                child._status = status
+    elif status is IDLE:
+        child.set_status(status)
+
+
+def tick_child(child: TreeNode) -> NodeStatus:
+    """Tick ``child`` through its fast path, wrapping errors with its path like executeTick."""
+    try:
+        status = child._fast()
+    except NodeExecutionError:
+        raise
+    except Exception as exc:
+        raise NodeExecutionError(child.config.path, child.config.registration_id, exc) from exc
+    store_child_status(child, status)
+    return status
 
 
 def manifest_for(cls: type[TreeNode], registration_id: str, ports: Any = None,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..errors import BTRuntimeError, LogicError
 from ..node import ConditionNode, NodeConfig, SyncActionNode
-from ..ports import ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port
+from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port
 from ..status import FAILURE, SUCCESS, NodeStatus
 
 
@@ -119,9 +119,15 @@ class SetBlackboardNode(SyncActionNode):
         if out is EMPTY:
             return FAILURE
         if dst is not None and dst.type.name != STRING.name and isinstance(out, str):
-            if not dst.type.strongly_typed:
-                dst.write(EMPTY)  # BT.CPP quirk: an untyped destination becomes "not initialized"
+            if dst.type.kind == "anytype":
+                # BT.CPP quirk: converting for an untyped destination yields an empty BT::Any,
+                # so the entry becomes "not initialized" and typed BT::Any from then on.
+                dst.write(EMPTY)
+                dst.type = ANY
                 return SUCCESS
+            if dst.type.kind == "any":
+                raise LogicError(f"Can't convert string [{out}] to type [BT::Any]: You didn't implement "
+                                 "the template specialization of convertFromString for this type: BT::Any")
             try:
                 out = dst.type.from_string(out, cfg.enums)
             except Exception as exc:

@@ -6,7 +6,7 @@ re-evaluated fresh next tick and a previously running sibling is stopped (spec 4
 
 from __future__ import annotations
 
-from ..errors import LogicError
+from ..errors import LogicError, NodeExecutionError
 from ..node import ControlNode, NodeConfig
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
@@ -26,15 +26,35 @@ class _ReactiveBase(ControlNode):
         cls.throw_if_multiple_running = enable
 
     def tick(self) -> NodeStatus:
-        if self._status is IDLE:
-            self._running_child = -1
-        if self._status is not RUNNING:
-            self.set_status(RUNNING)
+        current = self._status
+        if current is not RUNNING:
+            if current is IDLE:
+                self._running_child = -1
+            if self._subscribers:
+                self.set_status(RUNNING)
+            else:
+                self._status = RUNNING
         stop_on = self._stop_on
         all_skipped = True
         children = self.children
         for index, child in enumerate(children):
-            status = child.execute_tick()
+            # -- tick the child and store its status (node.tick_child, inlined for speed) --
+            prev = child._status
+            try:
+                status = child._fast()
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                raise NodeExecutionError(child.config.path, child.config.registration_id, exc) from exc
+            if status is not prev:
+                if status is not SKIPPED:
+                    if status is IDLE or child._subscribers:
+                        child.set_status(status)
+                    else:
+                        child._status = status
+            elif status is IDLE:
+                child.set_status(status)
+            # ---------------------------------------------------------------------------------
             if status is not SKIPPED:
                 all_skipped = False
             if status is RUNNING:

@@ -8,7 +8,7 @@ before this tick) and emit the wake-up signal, so ``tick_once`` keeps going and
 
 from __future__ import annotations
 
-from ..errors import LogicError
+from ..errors import LogicError, NodeExecutionError
 from ..node import ControlNode, NodeConfig
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
@@ -17,41 +17,73 @@ def _idle_child(node: ControlNode) -> LogicError:
     return LogicError(f"[{node.name}]: A children should not return IDLE")
 
 
-class SequenceNode(ControlNode):
-    """Tick children in order; FAILURE stops and restarts from the first child."""
+class _SequentialNode(ControlNode):
+    """Sequence and Fallback are mirror images: tick children in order, remembering the
+    current index; ``_advance_on`` moves to the next child, ``_stop_on`` ends the node."""
 
+    # Hot attributes live in slots: CPython 3.11 reads slots much faster than class
+    # constants looked up through an instance that also has a __dict__.
+    __slots__ = ("_idx", "_skipped", "_advance_on", "_stop_on", "_all_done", "_asynch")
     asynch = False
+    advance_on: NodeStatus = SUCCESS
+    stop_on: NodeStatus = FAILURE
+    all_done: NodeStatus = SUCCESS
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._idx = 0
         self._skipped = 0
+        cls = type(self)
+        self._advance_on, self._stop_on, self._all_done = cls.advance_on, cls.stop_on, cls.all_done
+        self._asynch = cls.asynch
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        children = self.children
-        n = len(children)
         current = self._status
         if current is not RUNNING:
             if current is IDLE:
                 self._skipped = 0
-            self.set_status(RUNNING)
-        while self._idx < n:
-            child = children[self._idx]
+            if self._subscribers:
+                self.set_status(RUNNING)
+            else:
+                self._status = RUNNING
+        children = self.children
+        n = len(children)
+        idx = self._idx
+        advance_on = self._advance_on
+        while idx < n:
+            child = children[idx]
             prev = child._status
-            status = child.execute_tick()
-            if status is RUNNING:
-                return RUNNING
-            if status is SUCCESS:
-                self._idx += 1
-                if self.asynch and prev is IDLE and self._idx < n:
+            # -- tick the child and store its status (node.tick_child, inlined for speed) --
+            try:
+                status = child._fast()
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                raise NodeExecutionError(child.config.path, child.config.registration_id, exc) from exc
+            if status is not prev:
+                if status is not SKIPPED:
+                    if status is IDLE or child._subscribers:
+                        child.set_status(status)
+                    else:
+                        child._status = status
+            elif status is IDLE:
+                child.set_status(status)
+            # ---------------------------------------------------------------------------------
+            if status is advance_on:
+                idx += 1
+                if self._asynch and prev is IDLE and idx < n:
+                    self._idx = idx
                     self.config.wake_up.emit()
                     return RUNNING
-            elif status is FAILURE:
+            elif status is RUNNING:
+                self._idx = idx
+                return RUNNING
+            elif status is self._stop_on:
                 self.reset_children()
                 self._idx = 0
-                return FAILURE
+                return status
             elif status is SKIPPED:
-                self._idx += 1
+                idx += 1
                 self._skipped += 1
             else:
                 raise _idle_child(self)
@@ -59,12 +91,16 @@ class SequenceNode(ControlNode):
         self.reset_children()
         self._idx = 0
         self._skipped = 0
-        return SKIPPED if all_skipped else SUCCESS
+        return SKIPPED if all_skipped else self._all_done
 
     def halt(self) -> None:
         self._idx = 0
         self._skipped = 0
         ControlNode.halt(self)
+
+
+class SequenceNode(_SequentialNode):
+    """Tick children in order; FAILURE stops and restarts from the first child next time."""
 
 
 class AsyncSequenceNode(SequenceNode):
@@ -118,54 +154,12 @@ class SequenceWithMemoryNode(ControlNode):
         ControlNode.halt(self)  # the index is kept on purpose (BT.CPP behaviour)
 
 
-class FallbackNode(ControlNode):
-    """Tick children in order until one succeeds; FAILURE moves to the next child."""
+class FallbackNode(_SequentialNode):
+    """Tick children in order until one succeeds; FAILURE moves on to the next child."""
 
-    asynch = False
-
-    def __init__(self, name: str, config: NodeConfig | None = None):
-        self._idx = 0
-        self._skipped = 0
-        super().__init__(name, config)
-
-    def tick(self) -> NodeStatus:
-        children = self.children
-        n = len(children)
-        current = self._status
-        if current is not RUNNING:
-            if current is IDLE:
-                self._skipped = 0
-            self.set_status(RUNNING)
-        while self._idx < n:
-            child = children[self._idx]
-            prev = child._status
-            status = child.execute_tick()
-            if status is RUNNING:
-                return RUNNING
-            if status is FAILURE:
-                self._idx += 1
-                if self.asynch and prev is IDLE and self._idx < n:
-                    self.config.wake_up.emit()
-                    return RUNNING
-            elif status is SUCCESS:
-                self.reset_children()
-                self._idx = 0
-                return SUCCESS
-            elif status is SKIPPED:
-                self._idx += 1
-                self._skipped += 1
-            else:
-                raise _idle_child(self)
-        all_skipped = self._skipped == n
-        self.reset_children()
-        self._idx = 0
-        self._skipped = 0
-        return SKIPPED if all_skipped else FAILURE
-
-    def halt(self) -> None:
-        self._idx = 0
-        self._skipped = 0
-        ControlNode.halt(self)
+    advance_on = FAILURE
+    stop_on = SUCCESS
+    all_done = FAILURE
 
 
 class AsyncFallbackNode(FallbackNode):
