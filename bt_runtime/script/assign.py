@@ -7,6 +7,7 @@ double, string) and the value is converted into it (``Any::copyInto``), spec 6.4
 
 from __future__ import annotations
 
+import operator
 from typing import Any
 
 from ..blackboard import Blackboard, Entry
@@ -16,6 +17,8 @@ from .errors import CastError
 from .operators import ieee_div, not_init
 from .values import (
     INT64_MAX,
+    MAX_EXACT,
+    TWO_63,
     UINT64_MAX,
     cast_string,
     normalize,
@@ -136,31 +139,67 @@ def missing_entry(key: str) -> BTRuntimeError:
                           "If you want to create a new one, use the operator [:=] instead of [=]")
 
 
-def make_assign(op: str, key: str, value_fn):
-    """A closure ``(bb, enums) -> stored value`` for ``key op <value_fn>``."""
-    create = op == ":="
-    plain = op in (":=", "=")
+def _fast_int(result: float, entry: Entry) -> int | None:
+    """A double stored into an int64 entry, when that cannot fail; None means 'take the slow path'."""
+    if result.is_integer() and -TWO_63 <= result < TWO_63 and entry.type.hi != UINT64_MAX:
+        return int(result)
+    return None
 
-    def assign(bb: Blackboard, enums):
+
+def make_assign(op: str, key: str, value_fn):
+    """A closure ``(bb, enums) -> stored value`` for ``key op <value_fn>``.
+
+    The closures inline the frequent cases (a double or int64 counter, a value of the entry's
+    own kind); anything else goes through ``_store``/``_update``, which hold the full rules.
+    """
+    create = op == ":="
+
+    def lookup(bb: Blackboard):
         entry = bb.get_entry(key)
         if entry is None:
             if not create:
                 raise missing_entry(key)
             entry = bb.create_entry(key, ANYTYPE)
-        value = value_fn(bb, enums)  # evaluated after the entry exists: 'x := x' is 'not initialized'
-        if value is EMPTY:
-            raise not_init("right", op)
-        if plain:
-            # fast path: an untyped entry, or the same kind again (a double counter)
+        return entry
+
+    if op in (":=", "="):
+        def assign(bb: Blackboard, enums):
+            entry = lookup(bb)
+            value = value_fn(bb, enums)  # after the entry exists: 'x := x' is 'not initialized'
+            if value is EMPTY:
+                raise not_init("right", op)
             dst = entry.value
-            if (dst is EMPTY and entry.type.kind == "anytype") or (
-                    type(value) is type(dst) and type(value) is not int):
+            tv = type(value)
+            if (dst is EMPTY and entry.type.kind == "anytype") or (tv is type(dst) and tv is not int):
                 entry.write(value)
                 return value
+            if type(dst) is int and tv is float and dst <= INT64_MAX:
+                new = _fast_int(value, entry)
+                if new is not None:
+                    entry.write(new)
+                    return new
             return _store(key, entry, value, enums)
-        return _update(op, entry, value)
+        return assign
 
-    return assign
+    arith = {"+=": operator.add, "-=": operator.sub, "*=": operator.mul, "/=": ieee_div}[op]
+
+    def update(bb: Blackboard, enums):
+        entry = lookup(bb)
+        value = value_fn(bb, enums)
+        if value is EMPTY:
+            raise not_init("right", op)
+        dst = entry.value
+        td = type(dst)
+        tv = type(value)
+        if (td is float or (td is int and -MAX_EXACT <= dst <= MAX_EXACT)) and (
+                tv is float or (tv is int and -MAX_EXACT <= value <= MAX_EXACT)):
+            result = arith(float(dst), float(value))
+            new = result if td is float else _fast_int(result, entry)
+            if new is not None:
+                entry.write(new)
+                return new
+        return _update(op, entry, value)
+    return update
 
 
 def make_bad_assign(op: str):
