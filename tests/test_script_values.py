@@ -1,7 +1,8 @@
 """Value-layer rules the script engine relies on: from_chars parsing, Any casts, kinds.
 
 Also pins two fixes made in the shared layer while writing the engine: ``parse_float``
-reports ``from_chars``'s out-of-range results (``ports.py``).
+reports ``from_chars``'s out-of-range results (``ports.py``) and a second ``@`` in a
+created key is a ``LogicError`` (``blackboard.py``).
 """
 
 from __future__ import annotations
@@ -98,3 +99,11 @@ def test_parse_float_in_range():
     assert parse_float("3.40282356e38", "float") == 3.40282356e38   # rounds to FLT_MAX
     assert parse_float("-inf") == -math.inf and math.isnan(parse_float("nan"))
     assert parse_float("0e-999") == 0.0
+
+
+def test_second_at_in_a_created_key_is_a_logic_error():
+    # BT.CPP 4.10 Blackboard::createEntry throws LogicError here (blackboard.py fix)
+    from bt_runtime.blackboard import Blackboard
+    from bt_runtime.errors import LogicError
+    with pytest.raises(LogicError, match="Character '@' used multiple times in the key"):
+        Blackboard().create_entry("@a@b")
