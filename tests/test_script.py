@@ -513,6 +513,9 @@ def test_values_written_by_the_host():
     assert runtime_message("flag = 0.5", bb).endswith("can't be converted to [bool]")
     bb.set("st", NodeStatus.SUCCESS)
     assert run("st == 2", bb) == 1.0
+    # enum-typed entries have no string converter in BT.CPP: the number rule applies
+    assert cast_message("st = 'FAILURE'", bb) == "Any failed string to number conversion"
+    assert run("st = 'FAILURE'", bb, {"FAILURE": 3}) == 3.0
     bb.create_entry("u", UINT64)
     bb.set("u", 5)
     assert runtime_message("u = -1", bb).endswith("can't be converted to [unsigned long]")

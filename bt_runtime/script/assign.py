@@ -74,9 +74,10 @@ def _dst_type_name(entry: Entry) -> str:
 
 
 def _has_converter(entry: Entry) -> bool:
-    # BT.CPP gives enum-typed entries no string converter (the scripting-enum table is separate).
+    # BT.CPP gives enum-typed entries (NodeStatus included) no string converter: a string goes
+    # through the number rule instead (scripting enums, then a numeric parse).
     declared = entry.type
-    return declared.has_converter and declared.kind != "enum"
+    return declared.has_converter and declared.kind not in ("enum", "status")
 
 
 def _store(key: str, entry: Entry, value: Any, enums: dict[str, int] | None) -> Any:
