@@ -112,7 +112,7 @@ class Blackboard:
         """Create (or return, after a type check) the entry ``key`` (spec 8.3)."""
         if key[:1] == "@":
             if "@" in key[1:]:
-                raise BTRuntimeError("Character '@' used multiple times in the key")
+                raise LogicError("Character '@' used multiple times in the key")
             return self.root().create_entry(key[1:], type_)
         entry = self._storage.get(key)
         if entry is not None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import struct
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from enum import Enum
@@ -64,11 +65,29 @@ def parse_int(text: str, lo: int = INT64_MIN, hi: int = INT64_MAX) -> int:
 
 
 def parse_float(text: str, type_name: str = "double") -> float:
-    """C ``from_chars`` general format: sign, decimals, exponent, inf/nan; trailing ignored."""
+    """C ``from_chars`` general format: sign, decimals, exponent, inf/nan; trailing ignored.
+
+    Like ``from_chars``, a finite number that overflows to infinity or underflows to zero in
+    the target type (``result_out_of_range``) is an error, e.g. ``1e999`` or ``1e-400``.
+    """
     m = _FLOAT_PREFIX.match(text)
     if not m:
         raise BTRuntimeError(f"Can't convert string [{text}] to {type_name}")
-    return float(m.group(0))
+    number = m.group(0)
+    value = float(number)
+    if number.lstrip("-")[:1] in "iInN":  # inf / infinity / nan
+        return value
+    if type_name == "float":
+        try:
+            narrowed = struct.unpack("f", struct.pack("f", value))[0]
+        except OverflowError:
+            narrowed = math.inf
+    else:
+        narrowed = value
+    mantissa = re.split("[eE]", number)[0]
+    if math.isinf(narrowed) or (narrowed == 0.0 and mantissa.strip("-0.") != ""):
+        raise BTRuntimeError(f"Can't convert string [{text}] to {type_name}")
+    return value
 
 
 def parse_bool(text: str) -> bool:

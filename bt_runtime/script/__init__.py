@@ -1,0 +1,12 @@
+"""The BehaviorTree.CPP 4.10 script language (spec section 6), compiled to Python closures.
+
+``compile_script(text)`` parses once (``ScriptError`` on a syntax error); ``Script.run(bb,
+enums)`` evaluates against a blackboard and returns the last expression's value;
+``to_bool``/``Script.run_bool`` give the condition value used by pre-conditions.
+"""
+
+from .compiler import Script, compile_script
+from .errors import CastError, ScriptError, ScriptRuntimeError
+from .values import to_bool
+
+__all__ = ["CastError", "Script", "ScriptError", "ScriptRuntimeError", "compile_script", "to_bool"]

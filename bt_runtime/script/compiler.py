@@ -1,0 +1,306 @@
+"""AST -> nested Python closures, and the ``Script`` object callers run every tick.
+
+Each AST node becomes a closure ``f(blackboard, enums) -> value``. The closures inline the
+common case (doubles, a constant operand, a string compared with a constant) and call
+``operators``/``assign`` for everything else, which holds the exact BT.CPP rules. Sub-trees
+made only of literals are evaluated once here when that cannot fail. No ``eval``/``exec``.
+"""
+
+from __future__ import annotations
+
+import operator
+from functools import lru_cache
+from typing import Any
+
+from ..errors import BTRuntimeError
+from ..ports import EMPTY
+from .assign import make_assign, make_bad_assign
+from .errors import CastError, ScriptError, ScriptRuntimeError
+from .operators import binary, compare, ieee_div, unary
+from .parser import Assign, Binary, Compare, Literal, Name, Node, ParseError, Ternary, Unary, parse
+from .values import FLT_EPSILON, MAX_EXACT, cast_double, normalize, to_bool
+
+Fn = Any  # Callable[[Blackboard, dict[str, int] | None], Any]
+
+# For '<' '>' '<=' '>=': the test under which BT.CPP says the link fails (NaN-correct).
+_FAILS = {"<": operator.ge, ">": operator.le, "<=": operator.gt, ">=": operator.lt}
+_ARITH = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": ieee_div}
+
+
+def _exact_number(value: Any) -> bool:
+    """A constant that converts to double without error (so the fast path may use it)."""
+    t = type(value)
+    return t is float or (t is int and -MAX_EXACT <= value <= MAX_EXACT)
+
+
+# --- leaves ---------------------------------------------------------------------------------
+
+def _literal(value: Any) -> Fn:
+    def literal(bb, enums):
+        return value
+    return literal
+
+
+def _name(key: str) -> Fn:
+    def name(bb, enums):
+        if enums and key in enums:  # a scripting enum shadows a blackboard entry
+            return float(enums[key])
+        entry = bb.get_entry(key)
+        if entry is None:
+            raise BTRuntimeError(f"Variable not found: {key}")
+        value = entry.value
+        t = type(value)
+        if t is float or t is int or t is str:
+            return value
+        return normalize(value)
+    return name
+
+
+# --- operators ------------------------------------------------------------------------------
+
+def _unary(op: str, f: Fn) -> Fn:
+    if op == "-":
+        def negate(bb, enums):
+            v = f(bb, enums)
+            if type(v) is float:
+                return -v
+            return unary("-", v)
+        return negate
+    if op == "!":
+        def logical_not(bb, enums):
+            v = f(bb, enums)
+            if type(v) is float:
+                return 0.0 if v else 1.0
+            return unary("!", v)
+        return logical_not
+
+    def complement(bb, enums):
+        return unary(op, f(bb, enums))
+    return complement
+
+
+def _binary(op: str, lf: Fn, rf: Fn, right: Node) -> Fn:
+    arith = _ARITH.get(op)
+    if arith is not None:
+        if isinstance(right, Literal) and _exact_number(right.value) and not (op == "/" and right.value == 0):
+            const = right.value
+            rv = float(const)
+
+            def arith_const(bb, enums):
+                x = lf(bb, enums)
+                t = type(x)
+                if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                    return arith(x, rv)
+                return binary(op, x, const)
+            return arith_const
+
+        def arith_any(bb, enums):
+            x = lf(bb, enums)
+            y = rf(bb, enums)
+            if type(x) is float and type(y) is float:
+                return arith(x, y)
+            return binary(op, x, y)
+        return arith_any
+
+    if op == "&&":
+        def logic_and(bb, enums):
+            x = lf(bb, enums)
+            y = rf(bb, enums)  # no short-circuit: both sides always run
+            if type(x) is float and type(y) is float:
+                return 1.0 if (x != 0.0 and y != 0.0) else 0.0
+            return binary(op, x, y)
+        return logic_and
+    if op == "||":
+        def logic_or(bb, enums):
+            x = lf(bb, enums)
+            y = rf(bb, enums)
+            if type(x) is float and type(y) is float:
+                return 1.0 if (x != 0.0 or y != 0.0) else 0.0
+            return binary(op, x, y)
+        return logic_or
+
+    def other(bb, enums):  # & | ^ ..
+        return binary(op, lf(bb, enums), rf(bb, enums))
+    return other
+
+
+def _compare_one(op: str, lf: Fn, rf: Fn, right: Node) -> Fn:
+    """A single comparison link (the usual case), with fast paths."""
+    const = right.value if isinstance(right, Literal) else EMPTY
+    if _exact_number(const):
+        rv = float(const)
+        if op in ("==", "!="):
+            same, differ = (1.0, 0.0) if op == "==" else (0.0, 1.0)
+
+            def eq_number(bb, enums):
+                x = lf(bb, enums)
+                t = type(x)
+                if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                    return same if abs(x - rv) <= FLT_EPSILON else differ
+                return 1.0 if compare(op, x, const, enums) else 0.0
+            return eq_number
+        fails = _FAILS[op]
+
+        def ordey_number(bb, enums):
+            x = lf(bb, enums)
+            t = type(x)
+            if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                return 0.0 if fails(x, rv) else 1.0
+            return 1.0 if compare(op, x, const, enums) else 0.0
+        return ordey_number
+
+    if type(const) is str:
+        test = {"==": operator.eq, "!=": operator.ne, "<": operator.lt, ">": operator.gt,
+                "<=": operator.le, ">=": operator.ge}[op]
+
+        def with_string(bb, enums):
+            x = lf(bb, enums)
+            if type(x) is str:
+                return 1.0 if test(x, const) else 0.0
+            return 1.0 if compare(op, x, const, enums) else 0.0
+        return with_string
+
+    def general(bb, enums):
+        x = lf(bb, enums)
+        y = rf(bb, enums)
+        return 1.0 if compare(op, x, y, enums) else 0.0
+    return general
+
+
+def _compare_chain(ops: list[str], fns: list[Fn]) -> Fn:
+    first = fns[0]
+    links = list(zip(ops, fns[1:]))
+
+    def chain(bb, enums):
+        x = first(bb, enums)
+        for op, f in links:
+            y = f(bb, enums)  # later operands only run while the chain holds
+            if not compare(op, x, y, enums):
+                return 0.0
+            x = y
+        return 1.0
+    return chain
+
+
+def _ternary(cf: Fn, tf: Fn, ef: Fn) -> Fn:
+    def ternary(bb, enums):
+        c = cf(bb, enums)
+        # BT.CPP means "non-empty string is true" but its type test never matches a string,
+        # so a string condition goes through the numeric cast (and fails if not numeric).
+        if (c != 0.0) if type(c) is float else (cast_double(c) != 0.0):
+            return tf(bb, enums)
+        return ef(bb, enums)
+    return ternary
+
+
+def _sequence(fns: list[Fn]) -> Fn:
+    if len(fns) == 1:
+        return fns[0]
+    head = fns[:-1]
+    last = fns[-1]
+
+    def sequence(bb, enums):
+        for f in head:
+            f(bb, enums)
+        return last(bb, enums)
+    return sequence
+
+
+# --- folding and dispatch -------------------------------------------------------------------
+
+def _fold(node: Node) -> Node:
+    """Replace a unary/binary operator over literals by its value, when that cannot fail."""
+    if isinstance(node, Unary):
+        operand = _fold(node.operand)
+        if isinstance(operand, Literal):
+            try:
+                return Literal(unary(node.op, operand.value))
+            except BTRuntimeError:
+                pass
+        return Unary(node.op, operand)
+    if isinstance(node, Binary):
+        left, right = _fold(node.left), _fold(node.right)
+        if isinstance(left, Literal) and isinstance(right, Literal):
+            try:
+                value = binary(node.op, left.value, right.value)
+                if value is not EMPTY:
+                    return Literal(value)
+            except BTRuntimeError:
+                pass
+        return Binary(node.op, left, right)
+    return node
+
+
+def compile_node(node: Node) -> Fn:
+    node = _fold(node)
+    if isinstance(node, Literal):
+        return _literal(node.value)
+    if isinstance(node, Name):
+        return _name(node.name)
+    if isinstance(node, Unary):
+        return _unary(node.op, compile_node(node.operand))
+    if isinstance(node, Binary):
+        return _binary(node.op, compile_node(node.left), compile_node(node.right), node.right)
+    if isinstance(node, Compare):
+        fns = [compile_node(n) for n in node.operands]
+        if len(node.ops) == 1:
+            return _compare_one(node.ops[0], fns[0], fns[1], _fold(node.operands[1]))
+        return _compare_chain(node.ops, fns)
+    if isinstance(node, Ternary):
+        return _ternary(compile_node(node.cond), compile_node(node.then), compile_node(node.other))
+    if isinstance(node, Assign):
+        if isinstance(node.target, Name):
+            return make_assign(node.op, node.target.name, compile_node(node.value))
+        return make_bad_assign(node.op)
+    raise TypeError(f"unknown AST node {node!r}")
+
+
+# --- public object --------------------------------------------------------------------------
+
+class Script:
+    """A compiled script. ``run`` returns the last expression's value (int, float, str, EMPTY)."""
+
+    __slots__ = ("text", "_fn")
+
+    def __init__(self, text: str, fn: Fn):
+        self.text = text
+        self._fn = fn
+
+    def run(self, blackboard, enums: dict[str, int] | None = None) -> Any:
+        try:
+            return self._fn(blackboard, enums)
+        except CastError:
+            raise
+        except BTRuntimeError as exc:
+            raise ScriptRuntimeError(f"Error in script [{self.text}]\n{exc}") from exc
+
+    def run_bool(self, blackboard, enums: dict[str, int] | None = None) -> bool:
+        """``run`` then the bool conversion of spec 6.5 (pre-conditions, ScriptCondition)."""
+        try:
+            value = self._fn(blackboard, enums)
+        except CastError:
+            raise
+        except BTRuntimeError as exc:
+            raise ScriptRuntimeError(f"Error in script [{self.text}]\n{exc}") from exc
+        if type(value) is float:
+            return value != 0.0
+        return to_bool(value)
+
+    def __repr__(self) -> str:
+        return f"Script({self.text!r})"
+
+
+@lru_cache(maxsize=4096)
+def compile_script(text: str) -> Script:
+    """Parse and compile ``text`` once (cached: a Script holds no state, so it can be shared).
+
+    Raises ``ScriptError`` ('Error in the script "<text>"\\n<parser message>').
+    """
+    try:
+        statements = parse(text)
+        fn = _sequence([compile_node(s) for s in statements])
+    except ParseError as exc:
+        raise ScriptError(text, str(exc)) from None
+    except RecursionError:
+        raise ScriptError(text, "Parse error at position 0: expression nested too deeply") from None
+    return Script(text, fn)
