@@ -64,7 +64,7 @@ class ImuSpec(_Spec):
 
 class OdomSpec(_Spec):
     rate_hz: float = Field(50.0, gt=0)
-    wheel_scale_sigma: float = Field(0.005, ge=0)  # relative wheel-radius error per wheel, drawn once
+    wheel_scale_sigma: float = Field(0.003, ge=0)  # relative wheel-radius error per wheel, drawn once
     slip_sigma: float = Field(0.02, ge=0)  # relative per-step noise on each wheel's travel
 
 
