@@ -122,8 +122,11 @@ class Component:
         self._set_state(ACTIVE, "restarted")
         return True
 
+    period_steps = 1  # poll() after every physics step unless a driver says otherwise
+
     def poll(self, step: int, now: float) -> None:
-        """Called by the physics task after every step."""
+        """Called by the physics task after each step at which the component is due (every
+        ``period_steps`` steps)."""
 
 
 class Driver(Component):
@@ -142,8 +145,6 @@ class Driver(Component):
         self._publish: Callable[[str, Any], None] = sim.bus.publish
 
     def poll(self, step: int, now: float) -> None:
-        if step % self.period_steps:
-            return
         if self.state is not ACTIVE or now < self.silent_until:
             self.skip(now)
             return

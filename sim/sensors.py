@@ -74,9 +74,8 @@ class LidarDriver(Driver):
     def true_ranges(self) -> np.ndarray:
         """Noise-free ranges from the current ground-truth pose (inf beyond range_max)."""
         sim = self.sim
-        body = sim.physics.body
-        x, y = body.position
-        yaw = body.angle
+        phys = sim.physics
+        x, y, yaw = phys.x, phys.y, phys.angle
         s = self.spec
         c, sn = math.cos(yaw), math.sin(yaw)
         ox, oy = x + c * s.x - sn * s.y, y + sn * s.x + c * s.y
@@ -119,7 +118,6 @@ class ImuDriver(Driver):
         self.yaw = 0.0
         self._ax = self._ay = self._wz = 0.0
         self._n = 0
-        self.peak_accel = 0.0  # largest per-step |a| since the last sample (for tests/judging)
 
     def accumulate(self, ax: float, ay: float, wz: float, dt: float) -> None:
         self._ax += ax
@@ -176,9 +174,7 @@ class OdomDriver(Driver):
         self.v = self.w = 0.0  # measured twist
 
     def integrate(self, v: float, w: float, dt: float, now: float) -> None:
-        if v == 0.0 and w == 0.0:
-            self.v = self.w = 0.0
-            return
+        """One physics step of wheel travel (the simulator skips it while the wheels stand)."""
         if now >= self.slip_until:
             self.slip_l = self.slip_r = 1.0
             self.slip_until = math.inf
@@ -276,7 +272,8 @@ class BatteryModel:
         dock = self.sim.dock
         charging = False
         if dock is not None and v == 0.0 and w == 0.0:
-            x, y = self.sim.physics.body.position
+            phys = self.sim.physics
+            x, y = phys.x, phys.y
             charging = (x - dock.x) ** 2 + (y - dock.y) ** 2 <= self.dock_radius ** 2
         if charging != self.charging:
             self.charging = charging
@@ -363,9 +360,8 @@ class LocalizationDriver(Driver):
             self.ex = rho * self.ex + q * s.sigma_xy * k * nz()
             self.ey = rho * self.ey + q * s.sigma_xy * k * nz()
             self.eyaw = rho * self.eyaw + q * s.sigma_yaw * k * nz()
-            body = sim.physics.body
-            x, y = body.position
-            est = Pose2D(x + self.ex, y + self.ey, wrap_angle(body.angle + self.eyaw))
+            phys = sim.physics
+            est = Pose2D(phys.x + self.ex, phys.y + self.ey, wrap_angle(phys.angle + self.eyaw))
             self.map_odom = compose(est, inverse(odom_pose))
             self.covariance = s.sigma_xy ** 2
         else:

@@ -79,7 +79,7 @@ class SimEvent:
 class SimOptions(BaseModel):
     model_config = ConfigDict(extra="forbid")
     physics_hz: float = Field(100.0, gt=0)
-    substeps: int = Field(2, ge=1, le=50)
+    substeps: int = Field(1, ge=1, le=50)  # minimum; more when fast (<= 4 mm travel per substep)
     trajectory_hz: float = Field(10.0, gt=0)  # ground-truth recording and the ground_truth topic
     max_body_speed: float = Field(3.0, gt=0)  # m/s cap on the body (anti-tunnelling)
     restart_delay: float = Field(1.0, ge=0)  # default for every component
@@ -141,12 +141,14 @@ class Simulator:
         for c in (self.lidar, self.imu, self.odom, self.bumper, self.battery_driver, self.localization):
             self._components[c.name] = c
         self._drivers = list(self._components.values())
+        self._schedule_drivers()
 
         self.faults = FaultInjector(self)
 
         # state ------------------------------------------------------------------------------
         self._loop: asyncio.AbstractEventLoop | None = None
-        self._task: asyncio.Task | None = None
+        self._handle: asyncio.TimerHandle | None = None
+        self.error: BaseException | None = None
         self.t0 = 0.0
         self.step_count = 0
         self._prev_v = (0.0, 0.0)
@@ -179,7 +181,7 @@ class Simulator:
 
     @property
     def running(self) -> bool:
-        return self._task is not None and not self._task.done()
+        return self._handle is not None
 
     def _event(self, kind: str, **data: Any) -> SimEvent:
         ev = SimEvent(self.now, kind, data)
@@ -203,47 +205,60 @@ class Simulator:
         self.t0 = loop.time()
         self.step_count = 0
         self._record_truth(self.t0)
-        self._task = loop.create_task(self._run(), name="sim-physics")
+        self._schedule_drivers()
+        self.error = None
+        self._handle = loop.call_at(self.t0 + self.dt, self._tick)
         self.faults._arm()
         self._event("sim_started", world=self.world.name, robot=self.profile.name, seed=self.seed)
 
     async def stop(self) -> None:
-        task, self._task = self._task, None
+        """Stop stepping (and pending faults and restarts). Raises the error that stopped the
+        physics, if one did."""
+        handle, self._handle = self._handle, None
+        if handle is not None:
+            handle.cancel()
         self.faults._disarm()
         for c in self._components.values():
             t = c._restart_task
             if t is not None and not t.done():
                 t.cancel()
-        if task is not None:
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+                with contextlib.suppress(asyncio.CancelledError):
+                    await t
         self._event("sim_stopped")
+        if self.error is not None:
+            raise RuntimeError("the simulation stopped on an error") from self.error
 
     async def run_for(self, duration: float) -> None:
         """Convenience: start (if needed) and let the simulation run for ``duration`` seconds."""
         await self.start()
         await asyncio.sleep(duration)
 
-    async def _run(self) -> None:
-        loop = asyncio.get_running_loop()
-        dt = self.dt
-        t0 = self.t0
-        k = self.step_count
-        sleep = asyncio.sleep
+    def _tick(self) -> None:
+        """One physics step, then re-arm the timer for the next one (a timer-callback chain:
+        one event-loop iteration per step, about half the cost of a task that sleeps)."""
+        k = self.step_count + 1
+        loop = self._loop
         try:
-            while True:
-                k += 1
-                delay = t0 + k * dt - loop.time()
-                await sleep(delay if delay > 0 else 0)
-                self._step(k, loop.time())
-        except asyncio.CancelledError:
-            raise
-        except Exception:  # an error in the simulation must be visible, not swallowed
+            self._step(k, loop.time())
+        except Exception as exc:  # an error in the simulation must be visible, not swallowed
+            self._handle = None
+            self.error = exc
             log.exception("sim_physics_failed", step=k)
-            raise
+            self._event("sim_failed", error=repr(exc), step=k)
+            return
+        self._handle = loop.call_at(self.t0 + (k + 1) * self.dt, self._tick)
 
     # --- the step -----------------------------------------------------------------------------
+    def _schedule_drivers(self) -> None:
+        """Which components are due at step k: ``self._due[k % len(self._due)]``."""
+        periods = [getattr(d, "period_steps", 1) for d in self._drivers]
+        cycle = math.lcm(*periods) if periods else 1
+        if cycle > 100_000:  # pathological rates: fall back to polling everyone
+            cycle = 1
+            self._due = [[d for d in self._drivers]]
+            return
+        self._due = [[d for d, p in zip(self._drivers, periods) if k % p == 0] for k in range(cycle)]
+
     def _step(self, k: int, now: float) -> None:
         t_start = perf_counter()
         self.step_count = k
@@ -254,37 +269,35 @@ class Simulator:
             self._event("cmd_timeout")
         v, w = base.v, base.w
         phys = self.physics
-        t_phys = perf_counter()
         phys.step(v, w, dt)
-        self.perf["physics_s"] += perf_counter() - t_phys
-        body = phys.body
-        vx, vy = body.velocity
-        yaw = body.angle
-        wz = body.angular_velocity
+        t_phys = perf_counter()
+        perf = self.perf
+        perf["physics_s"] += t_phys - t_start
+        vx, vy, yaw = phys.vx, phys.vy, phys.angle
         pvx, pvy = self._prev_v
         self._prev_v = (vx, vy)
         axw, ayw = (vx - pvx) / dt, (vy - pvy) / dt
         c, s = math.cos(yaw), math.sin(yaw)
         imu = self.imu
         a_fwd, a_left = c * axw + s * ayw, -s * axw + c * ayw
-        imu.accumulate(a_fwd, a_left, wz, dt)
-        a = math.hypot(a_fwd, a_left)
-        if a > imu.peak_accel:
-            imu.peak_accel = a
-        self.odom.integrate(v, w, dt, now)
+        imu.accumulate(a_fwd, a_left, phys.wz, dt)
+        if v != 0.0 or w != 0.0:
+            self.odom.integrate(v, w, dt, now)
+        else:
+            self.odom.v = self.odom.w = 0.0
         self.battery.integrate(v, w, dt, now)
         if phys.contacts or self._touching or self._synthetic:
             self._update_contacts(now, c, s)
-        for d in self._drivers:
+        due = self._due
+        for d in due[k % len(due)]:
             d.poll(k, now)
         if k % self._traj_steps == 0:
             self._record_truth(now)
-        self.perf["steps"] += 1
-        self.perf["step_s"] += perf_counter() - t_start
+        perf["steps"] += 1
+        perf["step_s"] += perf_counter() - t_start
 
     def _update_contacts(self, now: float, c: float, s: float) -> None:
-        body = self.physics.body
-        bx, by = body.position
+        bx, by = self.physics.x, self.physics.y
         touching: dict[str, tuple[float, float]] = {}
         best = None
         total = 0.0
@@ -317,12 +330,10 @@ class Simulator:
         self.bumper.set_contact(now, contact)
 
     def _record_truth(self, now: float) -> None:
-        body = self.physics.body
-        x, y = body.position
-        yaw = wrap_angle(body.angle)
-        vx, vy = body.velocity
+        phys = self.physics
+        x, y, vx, vy, wz = phys.x, phys.y, phys.vx, phys.vy, phys.wz
+        yaw = wrap_angle(phys.angle)
         fwd = vx * math.cos(yaw) + vy * math.sin(yaw)
-        wz = body.angular_velocity
         self._traj.append((now, x, y, yaw, fwd, wz, self.in_contact))
         self.bus.publish("ground_truth", GroundTruth(now, Pose2D(x, y, yaw), Twist(fwd, wz), self.in_contact))
 
@@ -353,17 +364,17 @@ class Simulator:
     @property
     def pose(self) -> Pose2D:
         """Ground-truth pose (map frame)."""
-        body = self.physics.body
-        x, y = body.position
-        return Pose2D(x, y, wrap_angle(body.angle))
+        phys = self.physics
+        return Pose2D(phys.x, phys.y, wrap_angle(phys.angle))
 
     @property
     def twist(self) -> Twist:
         """Ground-truth velocity in the robot frame."""
-        body = self.physics.body
-        vx, vy = body.velocity
-        yaw = body.angle
-        return Twist(vx * math.cos(yaw) + vy * math.sin(yaw), body.angular_velocity)
+        phys = self.physics
+        if phys._dirty:  # an impulse since the last step
+            phys.vx, phys.vy = phys.body.velocity
+        yaw = phys.angle
+        return Twist(phys.vx * math.cos(yaw) + phys.vy * math.sin(yaw), phys.wz)
 
     def trajectory(self) -> np.ndarray:
         """Ground truth recorded at ``trajectory_hz``: columns t, x, y, yaw, v, w, in_contact."""
@@ -400,6 +411,7 @@ class Simulator:
         after every physics step."""
         self._components[component.name] = component
         self._drivers.append(component)
+        self._schedule_drivers()
 
     def component_state(self, name: str) -> ComponentState:
         return self.component(name).state

@@ -89,12 +89,14 @@ def test_fail_next_n_restarts():
         s.faults.set_restart_policy("imu", fail_next=2, delay=0.3)
         s.faults.crash("imu")
         results = [await s.restart("imu") for _ in range(3)]
+        await asyncio.sleep(0.2)
         return results
 
     rec, results = run_sim(sim, body)
     assert results == [False, False, True]
     assert sim.component("imu").fail_next == 0
-    assert rec.stamps("imu")[-1] == pytest.approx(0.9, abs=0.021) or rec.stamps("imu") == []
+    stamps = rec.stamps("imu")
+    assert stamps and stamps[0] >= 0.9 - 1e-9 and stamps[-1] > 1.05
 
 
 def test_restart_of_a_running_component_and_concurrent_restarts_join():

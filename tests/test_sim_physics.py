@@ -202,3 +202,22 @@ def test_turning_in_place_follows_the_command():
     tr = sim.trajectory()
     assert np.hypot(tr[-1, 1] + 0.5, tr[-1, 2]) < 0.01
     assert tr[-1, 5] == pytest.approx(1.0, abs=0.01)
+
+
+def test_an_error_in_the_step_stops_the_sim_visibly():
+    sim = Simulator(corridor(), "burger", seed=0)
+
+    def broken(msg):
+        raise ValueError("subscriber bug")
+
+    async def main():
+        sim.subscribe("imu", broken)
+        await sim.start()
+        await asyncio.sleep(0.5)
+        assert not sim.running
+        await sim.stop()
+
+    with pytest.raises(RuntimeError, match="stopped on an error") as ei:
+        run_virtual(main)
+    assert isinstance(ei.value.__cause__, ValueError)
+    assert sim.events_of("sim_failed")[0].data["step"] == 2
