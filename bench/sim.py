@@ -16,7 +16,6 @@ object with ``async run(timeout)`` that commands ``sim`` will do.
 from __future__ import annotations
 
 import argparse
-import asyncio
 import json
 import math
 import sys

@@ -189,7 +189,7 @@ def test_battery_draws_more_when_driving_and_charges_at_the_dock():
     soc_idle, soc_drive = out["socs"]
     assert soc_idle > 50.0  # charging while docked
     assert sim.events_of("charging_started")
-    assert 50.0 - 0 < soc_idle and soc_idle - soc_drive > 0
+    assert soc_drive < soc_idle  # driving (off the dock) drains it
     powers = [m.power for m in rec["battery"]]
     assert max(powers) == pytest.approx(6.0 + 12.0 * 0.2)
 
