@@ -225,6 +225,8 @@ class PhysicsWorld:
         self.body.velocity = (0, 0)
         self.body.angular_velocity = 0
         self.control.position = (x, y)
+        self.control.velocity = (0, 0)
+        self.control.angular_velocity = 0
         self.space.reindex_shapes_for_body(self.body)
         self.x, self.y, self.angle = x, y, yaw
         self.vx = self.vy = self.wz = 0.0

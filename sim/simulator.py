@@ -385,9 +385,13 @@ class Simulator:
         self.physics.apply_impulse(ix, iy, point)
 
     def reset_pose(self, pose: Pose2D) -> None:
-        """Put the robot at a pose (standing still), re-initialise odometry (0, 0, 0) and the
-        localization there (like setting AMCL's initial pose)."""
+        """Put the robot at a pose, standing still (the current command is dropped), and
+        re-initialise odometry (0, 0, 0) and the localization there (like setting AMCL's
+        initial pose)."""
         self.physics.teleport(pose.x, pose.y, pose.yaw)
+        base = self.base
+        base.v = base.w = base.target_v = base.target_w = 0.0
+        base.timed_out = True
         self._prev_v = (0.0, 0.0)
         o = self.odom
         o.x = o.y = o.yaw = o.v = o.w = 0.0

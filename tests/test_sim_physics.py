@@ -71,7 +71,7 @@ def test_stall_against_wall_odometry_drifts_truth_stays():
     sim = Simulator(corridor(), "burger", seed=2)
 
     async def main():
-        rec = Recorder(sim, ["odom", "bumper"])
+        rec = Recorder(sim, ["odom", "bumper", "imu"])
         await sim.start()
         await drive(sim, 0.2, 0.0, 10.0)
         await sim.stop()
@@ -80,6 +80,10 @@ def test_stall_against_wall_odometry_drifts_truth_stays():
     rec = run_virtual(main)
     tr = sim.trajectory()
     r = sim.profile.radius
+    # the impact shows in the IMU as a deceleration spike
+    hit = sim.events_of("collision")[0].t
+    assert min(m.accel_x for m in rec["imu"] if hit - 0.05 < m.stamp < hit + 0.05) < -5.0
+    assert max(abs(m.accel_x) for m in rec["imu"] if 1.0 < m.stamp < hit - 0.1) < 0.2
     stalled = tr[tr[:, 0] > 6.0]
     # ground truth: pinned at the wall, not moving
     assert np.all(np.abs(stalled[:, 1] - (1.0 - r)) < 0.005)

@@ -223,3 +223,19 @@ def test_ground_truth_topic_and_trajectory():
     assert tr.shape[1] == 7 and len(tr) == len(rec["ground_truth"])
     assert tr[-1, 1] == rec["ground_truth"][-1].pose.x
     assert math.isclose(tr[1, 0] - tr[0, 0], 0.1)
+
+
+def test_reset_pose_reinitialises_odometry_and_localization():
+    from bt_runtime.runtime.messages import Pose2D
+
+    sim = Simulator(open_world(), "burger", seed=0)
+
+    async def body(s):
+        await drive(s, 0.2, 0.0, 2.0)
+        s.reset_pose(Pose2D(-2.0, 3.0, 1.0))
+        await asyncio.sleep(0.5)
+
+    rec = run_sim(sim, body, ["odom", "pose"])
+    assert (sim.pose.x, sim.pose.y) == pytest.approx((-2.0, 3.0), abs=1e-3)
+    assert rec["odom"][-1].pose.x == pytest.approx(0.0, abs=1e-3)
+    assert rec["pose"][-1].pose.distance_to(Pose2D(-2.0, 3.0)) < 0.1
