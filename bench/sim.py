@@ -3,7 +3,8 @@
     python bench/sim.py [--seconds 60] [--robot burger] [--seed 0] [--json]
 
 Drives the robot from the front yard through the front door, the east room and the study
-with a scripted waypoint follower on ground truth (10 Hz), physics at 100 Hz, every sensor at
+(and back, and again, until the time is up) with a scripted waypoint follower on ground
+truth (10 Hz, at most 0.3 m/s), physics at 100 Hz, every sensor at
 its profile rate, and prints the real-time factor with a breakdown from perf_counter
 accounting: physics (pymunk), lidar (ray casting + noise), other sim work (drivers, IMU/odom/
 battery integration, contacts, recording) and the rest (event loop, the follower, subscribers).
@@ -16,6 +17,7 @@ object with ``async run(timeout)`` that commands ``sim`` will do.
 from __future__ import annotations
 
 import argparse
+import asyncio
 import json
 import math
 import sys
@@ -32,8 +34,28 @@ from sim.scripted import WaypointFollower  # noqa: E402
 APARTMENT_ROUTE = [(1.3, -1.2), (1.3, 0.4), (3.2, 0.4), (3.2, 4.6), (1.1, 4.6), (1.1, 2.0)]
 
 
+class Patrol:
+    """Follow the route, then back, and so on, until the time is up."""
+
+    def __init__(self, sim: Simulator, route, speed: float) -> None:
+        self.sim = sim
+        self.route = list(route)
+        self.speed = speed
+
+    async def run(self, timeout: float) -> None:
+        loop = asyncio.get_running_loop()
+        end = loop.time() + timeout
+        back = [(self.sim.spawn.x, self.sim.spawn.y), *self.route[:-1]][::-1]
+        legs = [self.route, back]
+        i = 0
+        while loop.time() < end - 1e-9:
+            follower = WaypointFollower(self.sim, legs[i % 2], speed=self.speed)
+            await follower.run(timeout=end - loop.time())
+            i += 1
+
+
 def scripted(sim: Simulator):
-    return WaypointFollower(sim, APARTMENT_ROUTE)
+    return Patrol(sim, APARTMENT_ROUTE, speed=min(sim.profile.max_linear, 0.3))
 
 
 def drive(seconds: float, *, robot: str = "burger", seed: int = 0, world: str = "apartment",
@@ -43,16 +65,17 @@ def drive(seconds: float, *, robot: str = "burger", seed: int = 0, world: str = 
     for topic in ("scan", "imu", "odom", "pose", "battery", "bumper", "ground_truth"):
         sim.subscribe(topic, lambda m, t=topic: counts.__setitem__(t, counts.get(t, 0) + 1))
 
-    async def main() -> float:
+    async def main() -> tuple[float, float]:
         driver = make_driver(sim)
         await sim.start()
         t0 = time.perf_counter()
         await driver.run(timeout=seconds)
         wall = time.perf_counter() - t0
+        elapsed = sim.now - sim.t0
         await sim.stop()
-        return wall
+        return wall, elapsed
 
-    wall = run(main, virtual=True)
+    wall, seconds = run(main, virtual=True)
     tr = sim.trajectory()
     dist = float(sum(math.hypot(*d) for d in zip(tr[1:, 1] - tr[:-1, 1], tr[1:, 2] - tr[:-1, 2])))
     step_s = sim.perf["step_s"]
