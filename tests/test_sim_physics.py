@@ -185,13 +185,18 @@ def test_rosbot_drives_at_025():
     sim = Simulator(corridor(spawn=(-1.5, 0.0, 0.0)), "rosbot2", seed=0)
 
     async def main():
+        rec = Recorder(sim, ["cmd_vel_out"])
         await sim.start()
-        await drive(sim, 0.25, 0.0, 2.0)
+        await drive(sim, 0.25, 0.0, 1.5)
+        await drive(sim, 0.25, 0.5, 1.5)
         await sim.stop()
+        return rec
 
-    run_virtual(main)
+    rec = run_virtual(main)
     tr = sim.trajectory()
-    assert tr[-1, 4] == pytest.approx(0.25, abs=0.005)
+    assert tr[14, 4] == pytest.approx(0.25, abs=0.005)  # t = 1.4: straight at 0.25 m/s
+    assert tuple(tr[-1, 4:6]) == pytest.approx((0.25, 0.5), abs=0.01)  # and 0.25 m/s with 0.5 rad/s
+    assert rec["cmd_vel_out"][-1].linear == 0.25 and rec["cmd_vel_out"][-1].angular == 0.5
 
 
 def test_turning_in_place_follows_the_command():
