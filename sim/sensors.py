@@ -217,7 +217,7 @@ class BumperDriver(Driver):
     def set_contact(self, now: float, contact: Contact) -> None:
         changed = contact.in_contact != self.current.in_contact
         self.current = contact
-        if changed and self.state is ACTIVE and now >= self.silent_until:
+        if changed and self.state is ACTIVE and now >= self.silent_until and now >= self.stale_until:
             msg = self.corrupt(contact, self.corrupt_mode) if now < self.corrupt_until else contact
             self.last_message = msg
             self.published += 1

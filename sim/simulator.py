@@ -287,7 +287,7 @@ class Simulator:
             self.odom.v = self.odom.w = 0.0
         self.battery.integrate(v, w, dt, now)
         if phys.contacts or self._touching or self._synthetic:
-            self._update_contacts(now, c, s)
+            self._update_contacts(now, c, s, math.hypot(pvx, pvy))
         due = self._due
         for d in due[k % len(due)]:
             d.poll(k, now)
@@ -296,7 +296,7 @@ class Simulator:
         perf["steps"] += 1
         perf["step_s"] += perf_counter() - t_start
 
-    def _update_contacts(self, now: float, c: float, s: float) -> None:
+    def _update_contacts(self, now: float, c: float, s: float, speed_before: float) -> None:
         bx, by = self.physics.x, self.physics.y
         touching: dict[str, tuple[float, float]] = {}
         best = None
@@ -308,9 +308,8 @@ class Simulator:
                 best = cp
         for name, pt in touching.items():
             if name not in self._touching:
-                speed = math.hypot(*self._prev_v)
                 self._event("collision", obstacle=name, point=pt, commanded_v=self.base.v,
-                            body_speed=speed)
+                            body_speed=speed_before)
         for name in self._touching:
             if name not in touching:
                 self._event("collision_end", obstacle=name)

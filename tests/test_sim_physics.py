@@ -33,9 +33,11 @@ async def drive(sim: Simulator, v: float, w: float, duration: float, period: flo
         await asyncio.sleep(period)
 
 
-@pytest.mark.parametrize("v, w", [(1e9, 0.0), (math.inf, 0.0), (50.0, 30.0), (-1e6, 1e6), (math.nan, 1.0)])
-def test_absurd_commands_never_tunnel(v, w):
-    sim = Simulator(corridor(), "burger", seed=1)
+@pytest.mark.parametrize("robot, v, w", [
+    ("burger", 1e9, 0.0), ("burger", math.inf, 0.0), ("burger", 50.0, 30.0), ("burger", -1e6, 1e6),
+    ("burger", math.nan, 1.0), ("rosbot2", 1e9, 0.0), ("rosbot2", -1e9, 0.1)])
+def test_absurd_commands_never_tunnel(robot, v, w):
+    sim = Simulator(corridor(), robot, seed=1)
 
     async def main():
         await sim.start()
@@ -48,6 +50,8 @@ def test_absurd_commands_never_tunnel(v, w):
     assert np.all(tr[:, 1] <= 1.0 - r + 0.005)
     assert np.all(tr[:, 1] >= -1.85 + r - 0.005)
     assert np.all(np.hypot(np.diff(tr[:, 1]), np.diff(tr[:, 2])) <= sim.profile.max_linear * 0.1 + 1e-6)
+    if not math.isnan(v) and abs(v) > 1:  # it did drive into a wall and stayed there
+        assert len(sim.events_of("collision")) >= 1
 
 
 def test_huge_pushes_never_tunnel():
@@ -96,7 +100,9 @@ def test_stall_against_wall_odometry_drifts_truth_stays():
     pressed = [c for c in rec["bumper"] if c.in_contact]
     assert pressed and abs(pressed[-1].direction) < 0.1
     assert pressed[-1].point[0] == pytest.approx(1.0, abs=0.01)
-    assert sim.events_of("collision") and sim.events_of("collision")[0].data["obstacle"].endswith("wall")
+    hit_event = sim.events_of("collision")[0]
+    assert hit_event.data["obstacle"].endswith("wall")
+    assert hit_event.data["body_speed"] == pytest.approx(0.2, abs=0.01)  # the speed at impact
 
 
 def test_backing_off_releases_the_bumper():
