@@ -130,6 +130,7 @@ class PhysicsWorld:
         self.x, self.y, self.angle = x, y, yaw  # cached body state, refreshed by step()
         self.vx = self.vy = self.wz = 0.0
         self._dirty = False
+        self.forces: list[list[float]] = []  # [fx, fy, seconds left]: external forces (map frame)
         self._shapes: dict[str, list[pymunk.Shape]] = {}
         self._names: dict[pymunk.Shape, str] = {}
         self.contacts: list[ContactPoint] = []
@@ -207,11 +208,22 @@ class PhysicsWorld:
                     body.velocity = (vx * cap / sp, vy * cap / sp)
                 a = body.angle
             control.velocity = (v * math.cos(a), v * math.sin(a))
+            if self.forces:
+                self._apply_forces(h)
             self.space.step(h)
         self.x, self.y = body.position
         self.vx, self.vy = body.velocity
         self.angle = body.angle
         self.wz = body.angular_velocity
+
+    def _apply_forces(self, h: float) -> None:
+        fx = fy = 0.0
+        for f in self.forces:
+            fx += f[0]
+            fy += f[1]
+            f[2] -= h
+        self.forces = [f for f in self.forces if f[2] > 1e-12]
+        self.body.apply_force_at_world_point((fx, fy), self.body.position)
 
     def apply_impulse(self, ix: float, iy: float, point: tuple[float, float] | None = None) -> None:
         """An external impulse (N*s, map frame) at a world point (default: the centre)."""

@@ -383,6 +383,10 @@ class Simulator:
         """An external impulse (N*s, map frame) on the robot."""
         self.physics.apply_impulse(ix, iy, point)
 
+    def apply_force(self, fx: float, fy: float, duration: float) -> None:
+        """An external force (N, map frame) on the robot's centre for ``duration`` seconds."""
+        self.physics.forces.append([float(fx), float(fy), float(duration)])
+
     def reset_pose(self, pose: Pose2D) -> None:
         """Put the robot at a pose, standing still (the current command is dropped), and
         re-initialise odometry (0, 0, 0) and the localization there (like setting AMCL's

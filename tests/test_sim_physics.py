@@ -236,3 +236,22 @@ def test_an_error_in_the_step_stops_the_sim_visibly():
         run_virtual(main)
     assert isinstance(ei.value.__cause__, ValueError)
     assert sim.events_of("sim_failed")[0].data["step"] == 2
+
+
+def test_external_force_moves_a_standing_robot_against_traction():
+    sim = Simulator(corridor(spawn=(-1.0, 0.0, 0.0)), "burger", seed=0)
+
+    async def main():
+        await sim.start()
+        sim.apply_force(0.0, 5.0, 1.0)  # below the burger's traction (7.8 N): holds
+        await asyncio.sleep(1.5)
+        y_weak = sim.pose.y
+        sim.apply_force(0.0, 20.0, 0.5)  # above it: slides sideways
+        await asyncio.sleep(1.0)
+        await sim.stop()
+        return y_weak
+
+    y_weak = run_virtual(main)
+    assert abs(y_weak) < 1e-3
+    assert sim.pose.y > 0.1
+    assert sim.odom.y == 0.0  # the wheels never turned
