@@ -1,0 +1,1 @@
+"""Shipped robot profiles (YAML)."""

@@ -1,0 +1,378 @@
+"""Sensor drivers: lidar ``scan``, ``imu``, wheel ``odom``, ``bumper``, ``battery`` and the
+AMCL-like ``pose`` (component ``localization``). Each is a :class:`~sim.components.Driver`
+polled by the simulator's physics task; each draws its noise from its own random stream.
+
+Frames: ``scan`` beams are in the sensor frame (angle 0 = the robot's forward axis; the sensor
+sits at the profile's mounting offset). ``odom`` and the IMU's integrated ``yaw`` are in the
+odom frame (the pose where the simulator started = (0, 0, 0)). ``pose`` is in the map frame.
+Ranges follow REP 117: +inf = nothing within range_max, -inf = closer than range_min, NaN = an
+erroneous reading.
+"""
+
+from __future__ import annotations
+
+import math
+from time import perf_counter
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from bt_runtime.runtime.messages import (
+    BatteryState,
+    Contact,
+    Imu,
+    LaserScan,
+    LocalizedPose,
+    Odometry,
+    Pose2D,
+    Twist,
+)
+
+from .components import ACTIVE, Driver
+from .geometry import wrap_angle
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .simulator import Simulator
+
+
+def soc_after(soc: float, power_w: float, voltage: float, capacity_ah: float, dt: float) -> float:
+    """The paper's battery model with the capacity term (SoC in %):
+    ``SoC -= P / V * dt / 3600 / C_Ah * 100``, clamped to [0, 100]."""
+    soc = soc - power_w / voltage * dt / 3600.0 / capacity_ah * 100.0
+    return 0.0 if soc < 0.0 else 100.0 if soc > 100.0 else soc
+
+
+class _NoiseBuffer:
+    """Standard normals drawn in chunks (fewer generator calls on the 100 Hz path)."""
+
+    __slots__ = ("_rng", "_buf", "_i")
+
+    def __init__(self, rng: np.random.Generator, chunk: int = 4096) -> None:
+        self._rng = rng
+        self._buf = rng.standard_normal(chunk).tolist()
+        self._i = 0
+
+    def __call__(self) -> float:
+        i = self._i
+        if i >= len(self._buf):
+            self._buf = self._rng.standard_normal(len(self._buf)).tolist()
+            i = 0
+        self._i = i + 1
+        return self._buf[i]
+
+
+# ---------------------------------------------------------------------------------------------
+class LidarDriver(Driver):
+    def __init__(self, sim: Simulator, **kw) -> None:
+        spec = sim.profile.lidar
+        super().__init__(sim, "lidar", "scan", spec.rate_hz, **kw)
+        self.spec = spec
+        self.increment = spec.angle_increment
+        self.cast_time = 0.0  # perf_counter seconds spent ray casting (for benchmarks)
+        self.casts = 0
+
+    def true_ranges(self) -> np.ndarray:
+        """Noise-free ranges from the current ground-truth pose (inf beyond range_max)."""
+        sim = self.sim
+        phys = sim.physics
+        x, y, yaw = phys.x, phys.y, phys.angle
+        s = self.spec
+        c, sn = math.cos(yaw), math.sin(yaw)
+        ox, oy = x + c * s.x - sn * s.y, y + sn * s.x + c * s.y
+        return sim.raycaster().cast(ox, oy, yaw, s.samples, s.angle_min, self.increment, s.range_max)
+
+    def sample(self, now: float) -> LaserScan:
+        t0 = perf_counter()  # accounting only; time itself comes from the loop
+        r = self.true_ranges()
+        s = self.spec
+        sigma = s.noise_sigma * self.noise_scale(now)
+        finite = np.isfinite(r)
+        if sigma > 0:
+            r = r + np.where(finite, self.rng.standard_normal(r.shape[0]) * sigma, 0.0)
+        r[finite & (r < s.range_min)] = -np.inf
+        self.cast_time += perf_counter() - t0
+        self.casts += 1
+        return LaserScan(now, s.angle_min, self.increment, s.range_min, s.range_max, r)
+
+    def corrupt(self, msg: LaserScan, mode: str) -> LaserScan:
+        n = len(msg.ranges)
+        if mode == "nan":
+            ranges = np.full(n, np.nan)
+        else:
+            ranges = self.fault_rng.uniform(-1.0, 2 * self.spec.range_max, n)
+        return LaserScan(msg.stamp, msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max, ranges)
+
+
+# ---------------------------------------------------------------------------------------------
+class ImuDriver(Driver):
+    """Yaw rate, robot-frame linear acceleration (mean over the publishing period, derived from
+    the body's velocity change per physics step, so impacts show as spikes) and the yaw
+    integrated from the measured rate (drifts with the gyro bias)."""
+
+    def __init__(self, sim: Simulator, **kw) -> None:
+        spec = sim.profile.imu
+        super().__init__(sim, "imu", "imu", spec.rate_hz, **kw)
+        self.spec = spec
+        self.bias = float(self.rng.normal(0.0, spec.gyro_bias_sigma)) if spec.gyro_bias_sigma else 0.0
+        self._noise = _NoiseBuffer(self.rng)
+        self.yaw = 0.0
+        self._ax = self._ay = self._wz = 0.0
+        self._n = 0
+
+    def accumulate(self, ax: float, ay: float, wz: float, dt: float) -> None:
+        self._ax += ax
+        self._ay += ay
+        self._wz += wz
+        self._n += 1
+        self.yaw += (wz + self.bias) * dt
+
+    def _reset(self) -> tuple[float, float, float]:
+        n = self._n or 1
+        out = (self._ax / n, self._ay / n, self._wz / n)
+        self._ax = self._ay = self._wz = 0.0
+        self._n = 0
+        return out
+
+    def skip(self, now: float) -> None:
+        self._reset()
+
+    def sample(self, now: float) -> Imu:
+        ax, ay, wz = self._reset()
+        k = self.noise_scale(now)
+        s = self.spec
+        nz = self._noise
+        self.yaw = wrap_angle(self.yaw)
+        return Imu(now, wz + self.bias + s.gyro_sigma * k * nz(),
+                   ax + s.accel_sigma * k * nz(), ay + s.accel_sigma * k * nz(), self.yaw)
+
+    def corrupt(self, msg: Imu, mode: str) -> Imu:
+        if mode == "nan":
+            return Imu(msg.stamp, math.nan, math.nan, math.nan, math.nan)
+        g = self.garbage
+        return Imu(msg.stamp, g(50.0), g(200.0), g(200.0), g(math.pi))
+
+
+# ---------------------------------------------------------------------------------------------
+class OdomDriver(Driver):
+    """Wheel odometry: integrates the *wheels'* speeds (not the body's motion), with a per-run
+    wheel-radius error per wheel, per-step slip noise, and the wheel-slip fault's factors."""
+
+    def __init__(self, sim: Simulator, **kw) -> None:
+        spec = sim.profile.odom
+        super().__init__(sim, "odom", "odom", spec.rate_hz, **kw)
+        self.spec = spec
+        p = sim.profile
+        self.half_track = p.wheel_separation / 2
+        self.track = p.wheel_separation
+        self.scale_l = 1.0 + (float(self.rng.normal(0, spec.wheel_scale_sigma)) if spec.wheel_scale_sigma else 0.0)
+        self.scale_r = 1.0 + (float(self.rng.normal(0, spec.wheel_scale_sigma)) if spec.wheel_scale_sigma else 0.0)
+        self.slip_l = 1.0  # fault factors: >1 over-reads, <1 under-reads
+        self.slip_r = 1.0
+        self.slip_until = math.inf
+        self._noise = _NoiseBuffer(self.rng)
+        self.x = self.y = self.yaw = 0.0
+        self.v = self.w = 0.0  # measured twist
+
+    def integrate(self, v: float, w: float, dt: float, now: float) -> None:
+        """One physics step of wheel travel (the simulator skips it while the wheels stand)."""
+        if now >= self.slip_until:
+            self.slip_l = self.slip_r = 1.0
+            self.slip_until = math.inf
+        s = self.spec.slip_sigma
+        nz = self._noise
+        dl = (v - w * self.half_track) * dt * self.scale_l * self.slip_l * (1.0 + s * nz())
+        dr = (v + w * self.half_track) * dt * self.scale_r * self.slip_r * (1.0 + s * nz())
+        d = 0.5 * (dl + dr)
+        dth = (dr - dl) / self.track
+        mid = self.yaw + 0.5 * dth
+        self.x += d * math.cos(mid)
+        self.y += d * math.sin(mid)
+        self.yaw = wrap_angle(self.yaw + dth)
+        self.v = d / dt
+        self.w = dth / dt
+
+    def pose(self) -> Pose2D:
+        return Pose2D(self.x, self.y, self.yaw)
+
+    def sample(self, now: float) -> Odometry:
+        return Odometry(now, Pose2D(self.x, self.y, self.yaw), Twist(self.v, self.w))
+
+    def corrupt(self, msg: Odometry, mode: str) -> Odometry:
+        if mode == "nan":
+            return Odometry(msg.stamp, Pose2D(math.nan, math.nan, math.nan), Twist(math.nan, math.nan))
+        g = self.garbage
+        return Odometry(msg.stamp, Pose2D(g(100.0), g(100.0), g(math.pi)), Twist(g(10.0), g(10.0)))
+
+
+# ---------------------------------------------------------------------------------------------
+class BumperDriver(Driver):
+    """Contact events: published at once when the contact state changes, and at the bumper
+    rate while in contact. The state is set by the simulator from pymunk's collision handler
+    (and from the push fault)."""
+
+    def __init__(self, sim: Simulator, **kw) -> None:
+        super().__init__(sim, "bumper", "bumper", sim.profile.bumper_rate_hz, **kw)
+        self.current = Contact(0.0, False)
+
+    def set_contact(self, now: float, contact: Contact) -> None:
+        changed = contact.in_contact != self.current.in_contact
+        self.current = contact
+        if changed and self.state is ACTIVE and now >= self.silent_until and now >= self.stale_until:
+            msg = self.corrupt(contact, self.corrupt_mode) if now < self.corrupt_until else contact
+            self.last_message = msg
+            self.published += 1
+            self._publish(self.topic, msg)
+
+    def on_activate(self) -> None:
+        # a restarted bumper reports its state at once
+        c = self.current
+        msg = Contact(self.sim.now, c.in_contact, c.direction, c.point, c.impulse)
+        self.last_message = msg
+        self.published += 1
+        self._publish(self.topic, msg)
+
+    def sample(self, now: float) -> Contact | None:
+        c = self.current
+        if not c.in_contact:
+            return None
+        return Contact(now, True, c.direction, c.point, c.impulse)
+
+    def corrupt(self, msg: Contact, mode: str) -> Contact:
+        if mode == "nan":
+            return Contact(msg.stamp, msg.in_contact, math.nan, (math.nan, math.nan), math.nan)
+        return Contact(msg.stamp, bool(self.fault_rng.integers(0, 2)), self.garbage(math.pi), None,
+                       abs(self.garbage(10.0)))
+
+
+# ---------------------------------------------------------------------------------------------
+class BatteryModel:
+    """State of charge integrated every physics step (the battery drains whether or not its
+    driver publishes). Charging while docked (within ``dock_radius`` of the dock, not moving)."""
+
+    def __init__(self, sim: Simulator) -> None:
+        self.sim = sim
+        self.spec = sim.profile.battery
+        self.soc = self.spec.initial_soc
+        self.extra_power = 0.0  # W, the drain fault
+        self.extra_until = math.inf
+        self.power = self.spec.idle_power_w
+        self.charging = False
+        self.dock_radius = 0.25
+        self.depleted = self.soc <= 0.0
+
+    def voltage(self) -> float:
+        return self.spec.voltage(self.soc)
+
+    def integrate(self, v: float, w: float, dt: float, now: float) -> None:
+        spec = self.spec
+        if now >= self.extra_until:
+            self.extra_power = 0.0
+            self.extra_until = math.inf
+        power = spec.idle_power_w + spec.k_linear * abs(v) + spec.k_angular * abs(w) + self.extra_power
+        dock = self.sim.dock
+        charging = False
+        if dock is not None and v == 0.0 and w == 0.0:
+            phys = self.sim.physics
+            x, y = phys.x, phys.y
+            charging = (x - dock.x) ** 2 + (y - dock.y) ** 2 <= self.dock_radius ** 2
+        if charging != self.charging:
+            self.charging = charging
+            self.sim._event("charging_started" if charging else "charging_stopped", soc=self.soc)
+        self.power = power
+        net = power - spec.charge_power_w if charging else power
+        volts = spec.voltage_empty + (spec.voltage_full - spec.voltage_empty) * self.soc * 0.01
+        self.soc = soc_after(self.soc, net, volts, spec.capacity_ah, dt)
+        if self.soc <= 0.0 and not self.depleted:
+            self.depleted = True
+            self.sim._battery_depleted()
+        elif self.soc > 0.0 and self.depleted:
+            self.depleted = False
+            self.sim._battery_restored()
+
+
+class BatteryDriver(Driver):
+    def __init__(self, sim: Simulator, **kw) -> None:
+        super().__init__(sim, "battery", "battery", sim.profile.battery.rate_hz, **kw)
+        self.model = sim.battery
+
+    def sample(self, now: float) -> BatteryState:
+        m = self.model
+        volts = m.voltage()
+        net = m.power - (m.spec.charge_power_w if m.charging else 0.0)
+        return BatteryState(now, volts, m.soc, net / volts, m.power, m.spec.capacity_ah)
+
+    def corrupt(self, msg: BatteryState, mode: str) -> BatteryState:
+        if mode == "nan":
+            return BatteryState(msg.stamp, math.nan, math.nan, math.nan, math.nan, msg.capacity_ah)
+        g = self.garbage
+        return BatteryState(msg.stamp, abs(g(30.0)), g(300.0), g(20.0), g(100.0), msg.capacity_ah)
+
+
+# ---------------------------------------------------------------------------------------------
+def compose(a: Pose2D, b: Pose2D) -> Pose2D:
+    """a (+) b: b expressed in a's frame, brought to a's parent frame."""
+    c, s = math.cos(a.yaw), math.sin(a.yaw)
+    return Pose2D(a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, wrap_angle(a.yaw + b.yaw))
+
+
+def inverse(a: Pose2D) -> Pose2D:
+    c, s = math.cos(a.yaw), math.sin(a.yaw)
+    return Pose2D(-c * a.x - s * a.y, s * a.x - c * a.y, wrap_angle(-a.yaw))
+
+
+class LocalizationDriver(Driver):
+    """AMCL-like map-frame pose. While the lidar delivers good scans the estimate is ground
+    truth plus a slowly varying (AR(1)) error, and the map->odom transform is refreshed;
+    without scans it dead-reckons on odometry through the last transform (drifting with the
+    odometry's errors, growing covariance). It needs odometry: while the odom driver is down
+    (or silent) the pose stops updating."""
+
+    def __init__(self, sim: Simulator, **kw) -> None:
+        spec = sim.profile.localization
+        super().__init__(sim, "localization", "pose", spec.rate_hz, **kw)
+        self.spec = spec
+        self._noise = _NoiseBuffer(self.rng)
+        self.ex = self.ey = self.eyaw = 0.0
+        self.map_odom = sim.spawn  # odom starts at the spawn pose
+        self.covariance = spec.sigma_xy ** 2
+        self.estimate: Pose2D = sim.spawn
+
+    def _odom_ok(self, now: float) -> bool:
+        odom = self.sim.odom
+        return odom.state is ACTIVE and now >= odom.silent_until and now >= odom.stale_until
+
+    def _lidar_ok(self, now: float) -> bool:
+        lidar = self.sim.lidar
+        return (lidar.state is ACTIVE and now >= lidar.silent_until and now >= lidar.stale_until
+                and now >= lidar.corrupt_until)
+
+    def sample(self, now: float) -> LocalizedPose | None:
+        sim = self.sim
+        if not self._odom_ok(now):
+            return None
+        odom_pose = sim.odom.pose()
+        if self._lidar_ok(now):
+            s = self.spec
+            rho = s.correlation
+            q = math.sqrt(1 - rho * rho)
+            k = self.noise_scale(now)
+            nz = self._noise
+            self.ex = rho * self.ex + q * s.sigma_xy * k * nz()
+            self.ey = rho * self.ey + q * s.sigma_xy * k * nz()
+            self.eyaw = rho * self.eyaw + q * s.sigma_yaw * k * nz()
+            phys = sim.physics
+            est = Pose2D(phys.x + self.ex, phys.y + self.ey, wrap_angle(phys.angle + self.eyaw))
+            self.map_odom = compose(est, inverse(odom_pose))
+            self.covariance = s.sigma_xy ** 2
+        else:
+            est = compose(self.map_odom, odom_pose)
+            self.covariance += 0.0025 / self.rate_hz  # grows ~ (5 cm)^2 per second
+        self.estimate = est
+        return LocalizedPose(now, est, self.covariance)
+
+    def corrupt(self, msg: LocalizedPose, mode: str) -> LocalizedPose:
+        if mode == "nan":
+            return LocalizedPose(msg.stamp, Pose2D(math.nan, math.nan, math.nan), math.nan)
+        g = self.garbage
+        return LocalizedPose(msg.stamp, Pose2D(msg.pose.x + g(5.0), msg.pose.y + g(5.0), g(math.pi)),
+                             msg.covariance)

@@ -1,0 +1,1 @@
+"""Shipped world files (YAML) and their converter, build_worlds.py."""
