@@ -13,8 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .errors import BTRuntimeError, LogicError
-from .ports import (ANYTYPE, EMPTY, PortType, convert_exact, type_of_value,
-                    value_to_string)
+from .ports import ANYTYPE, EMPTY, PortType, convert_exact, type_of_value, value_to_string
 
 
 class Entry:

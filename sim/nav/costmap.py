@@ -399,12 +399,17 @@ class LocalCostmap(Costmap2D):
         self._cost_bytes = self.cost.tobytes()
 
     # -- window --------------------------------------------------------------------------
-    def _place(self, x: float, y: float) -> None:
+    def follow(self, pose: Pose2D) -> None:
+        """Keep the window centred on the robot between scans (recomposes only on a move)."""
+        if self._place(pose.x, pose.y):
+            self.recompose()
+
+    def _place(self, x: float, y: float) -> bool:
         m = self.map
         gi = math.floor((y - m.origin_y) / self.resolution) - self.height // 2
         gj = math.floor((x - m.origin_x) / self.resolution) - self.width // 2
         if self._placed and (gi, gj) == (self._gi, self._gj):
-            return
+            return False
         if self._placed:
             di, dj = gi - self._gi, gj - self._gj
             shifted = np.zeros_like(self.obstacle)
@@ -416,6 +421,7 @@ class LocalCostmap(Costmap2D):
         self._gi, self._gj, self._placed = gi, gj, True
         self.origin_x = m.origin_x + gj * self.resolution
         self.origin_y = m.origin_y + gi * self.resolution
+        return True
 
     def _map_slice(self, layer: np.ndarray) -> np.ndarray:
         """The window's view of a full-map layer (False outside the map)."""
