@@ -10,6 +10,7 @@ not enter occupied cells: a step that would overlap one is refused (the robot st
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import math
 from pathlib import Path as FsPath
 
@@ -109,10 +110,8 @@ class KinematicRobot:
     async def stop(self) -> None:
         if self._task is not None:
             self._task.cancel()
-            try:
+            with contextlib.suppress(asyncio.CancelledError):
                 await self._task
-            except asyncio.CancelledError:
-                pass
 
     def _publish(self, now: float, scan: bool) -> None:
         if self.publish_pose:
