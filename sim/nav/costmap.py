@@ -250,7 +250,7 @@ class GlobalCostmap(Costmap2D):
         fill = NO_INFORMATION if params.track_unknown_space else FREE_SPACE
         self._obstacle_fill = fill
         self.obstacle = np.full(grid.data.shape, fill, np.uint8)
-        self.static_version = 0  # bumps when static/updates change (planner heuristic cache)
+        self.base_version = 0  # bumps when static/updates/phantom change (planner heuristic cache)
         self.last_update_time = -math.inf
         self._relaxed: np.ndarray | None = None
         self._relaxed_version = -1
@@ -336,7 +336,9 @@ class GlobalCostmap(Costmap2D):
     def clear(self) -> None:
         """ClearEntireCostmap: drop the obstacle and phantom layers (static and updates stay)."""
         self.obstacle.fill(self._obstacle_fill)
-        self.phantom.fill(False)
+        if self.phantom.any():
+            self.phantom.fill(False)
+            self.base_version += 1
         self._recompute_all()
 
     def _mark_disc(self, layer: np.ndarray, x: float, y: float, radius: float) -> None:
@@ -350,23 +352,25 @@ class GlobalCostmap(Costmap2D):
     def add_obstacle(self, x: float, y: float, radius: float = 0.1) -> None:
         """A persistent lethal disc (the "map update" layer)."""
         self._mark_disc(self.updates, x, y, radius)
-        self.static_version += 1
+        self.base_version += 1
 
     def add_phantom(self, x: float, y: float, radius: float) -> None:
         """A fault-injected lethal disc, gone after ``clear()``."""
         self._mark_disc(self.phantom, x, y, radius)
+        self.base_version += 1
 
     # -- queries -------------------------------------------------------------------------
     def relaxed_cost(self) -> np.ndarray:
-        """Inflated static + updates layers with unknown as free: a cell-wise lower bound of the
-        master costs (used for the planner's heuristic)."""
-        if self._relaxed is None or self._relaxed_version != self.static_version:
-            lethal = (self.static == LETHAL) | self.updates
+        """Inflated static + updates + phantom layers with unknown as free: a cell-wise lower
+        bound of the master costs (the obstacle layer only adds lethal cells), used for the
+        planner's heuristic. Changes only with ``base_version``."""
+        if self._relaxed is None or self._relaxed_version != self.base_version:
+            lethal = (self.static == LETHAL) | self.updates | self.phantom
             relaxed = self.inflator.costs(lethal)
             # a cell the master may still report unknown (planned as free) must not cost more
             relaxed[(self.static == NO_INFORMATION) & (relaxed < INSCRIBED)] = FREE_SPACE
             self._relaxed = relaxed
-            self._relaxed_version = self.static_version
+            self._relaxed_version = self.base_version
         return self._relaxed
 
     def distance_field(self) -> np.ndarray:
@@ -392,6 +396,7 @@ class LocalCostmap(Costmap2D):
         self._gi = 0  # window origin as global cell indices (row, col)
         self._gj = 0
         self._placed = False
+        self.follow_slack_cells = 4  # between scans, re-centre only after 0.2 m of drift
         self.obstacle = np.zeros((h, w), bool)  # lethal marks (track_unknown_space false)
         self.phantom = np.zeros_like(global_costmap.phantom)  # full-map grid, like updates
         self.dist = np.full((h, w), np.inf)  # metres to the nearest lethal cell
@@ -401,14 +406,14 @@ class LocalCostmap(Costmap2D):
     # -- window --------------------------------------------------------------------------
     def follow(self, pose: Pose2D) -> None:
         """Keep the window centred on the robot between scans (recomposes only on a move)."""
-        if self._place(pose.x, pose.y):
+        if self._place(pose.x, pose.y, slack=self.follow_slack_cells):
             self.recompose()
 
-    def _place(self, x: float, y: float) -> bool:
+    def _place(self, x: float, y: float, slack: int = 0) -> bool:
         m = self.map
         gi = math.floor((y - m.origin_y) / self.resolution) - self.height // 2
         gj = math.floor((x - m.origin_x) / self.resolution) - self.width // 2
-        if self._placed and (gi, gj) == (self._gi, self._gj):
+        if self._placed and abs(gi - self._gi) <= slack and abs(gj - self._gj) <= slack:
             return False
         if self._placed:
             di, dj = gi - self._gi, gj - self._gj

@@ -69,6 +69,9 @@ class PlannerParams(_Model):
     # occupied goal fail with GOAL_OCCUPIED, which the autonomy layer wants to see.
     tolerance: float = Field(0.0, ge=0)
     smooth: bool = True
+    # accept the cached relaxed-optimal path if its master cost is within this fraction of the
+    # lower bound (bounded suboptimality; 0 = exact). See planner.py.
+    suboptimality_tolerance: float = Field(0.01, ge=0)
     # A* with the cached heuristic runs in Python; beyond this many expansions the planner
     # switches to a compiled Dijkstra (scipy) on the whole grid.
     max_python_expansions: int = Field(6000, gt=0)

@@ -6,19 +6,25 @@ blocked; unknown cells (255) cost like free ones when ``allow_unknown``, else ar
 
 Why it is fast enough for 1 Hz replanning inside a >= 100x real-time simulation:
 
-1. Per goal (and per version of the static map + ``add_obstacle`` layer) a compiled Dijkstra
-   (``scipy.sparse.csgraph``) computes the exact cost-to-goal over a *relaxed* costmap: static
-   layers only, unknown as free. Every master cost is >= its relaxed cost (the obstacle and
-   phantom layers only add lethal cells), so this field is an admissible, consistent heuristic.
-2. A replan first traces the relaxed-optimal path P from the field (a few hundred steps). If the
-   master costs along P equal the relaxed ones, P is optimal on the master costmap too (no
-   other path can be cheaper than its relaxed cost) and is returned without any search.
-3. Otherwise a Python A* runs with that near-perfect heuristic: when sensed obstacles only
-   nudge costs it expands little more than the path itself.
-4. If A* needs more than ``max_python_expansions`` nodes (a real detour), a compiled Dijkstra
-   on the master costmap finishes the job.
-Whichever route is taken, the result is a minimum-cost path for the same edge costs, and the
-same inputs always give the same path (no randomness, no wall-clock limits).
+1. Per goal (and per version of the static, ``add_obstacle`` and phantom layers) a compiled
+   Dijkstra (``scipy.sparse.csgraph``) computes the exact cost-to-goal over a *relaxed*
+   costmap: those layers only, unknown as free. Every master cost is >= its relaxed cost (the
+   obstacle layer only adds lethal cells), so this field is an admissible, consistent heuristic.
+2. A replan first traces the relaxed-optimal path P from the field (a few hundred steps). No path
+   can cost less than P's relaxed cost, so if P's master cost is within
+   ``suboptimality_tolerance`` (1 %) of it, P is returned without any search ("cached"): optimal
+   when sensing changed nothing along it, at most 1 % worse than optimal otherwise (LiDAR noise
+   next to walls shifts inflation costs by a few units; a real obstacle near the path does not
+   fit in 1 %).
+3. If P is still passable but costs along it changed (sensed obstacles near it), a Python A*
+   with that near-perfect heuristic finds the optimum expanding little more than the path
+   ("astar").
+4. If P is blocked (a sensed obstacle across it): a connected-components check answers
+   NO_VALID_PATH in ~1 ms when the goal is cut off; otherwise, if an earlier detour to this goal
+   left a master cost-to-goal field, A* is guided by it ("learned": near-optimal, possibly not
+   optimal if costs dropped since); else, or if that fails, a compiled Dijkstra on the master
+   costmap gives the optimum ("dijkstra") and leaves its field for the next replans.
+Searches never read the clock: the same inputs always give the same path.
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import ndimage
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
@@ -47,7 +54,7 @@ class PlanResult:
     points: np.ndarray | None = None  # (N, 3): x, y, yaw in the map frame
     cost: float = math.nan  # path cost in cell units (sum of edge costs)
     message: str = ""
-    method: str = ""  # "cached" | "astar" | "dijkstra" | "trivial"
+    method: str = ""  # "cached" | "astar" | "learned" | "dijkstra" | "trivial" | "components"
     expansions: int = 0
     stats: dict = field(default_factory=dict)
 
@@ -78,6 +85,8 @@ class GridPlanner:
         self._edge_len = np.array([L for _, L in self._offs])
         self._heuristics: OrderedDict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = OrderedDict()
         self._master_cache: tuple[int, bool, np.ndarray] | None = None
+        self._learned: OrderedDict[int, np.ndarray] = OrderedDict()  # goal -> master field
+        self._labels: tuple[tuple[int, bool], np.ndarray] | None = None
         self._relaxed_w: tuple[int, np.ndarray, np.ndarray] | None = None
         self.last: PlanResult | None = None
 
@@ -102,9 +111,9 @@ class GridPlanner:
 
     def _relaxed_weights(self) -> np.ndarray:
         cm = self.costmap
-        if self._relaxed_w is None or self._relaxed_w[0] != cm.static_version:
+        if self._relaxed_w is None or self._relaxed_w[0] != cm.base_version:
             w = self._weights(cm.relaxed_cost(), True)
-            self._relaxed_w = (cm.static_version, w, self._edge_data(w))
+            self._relaxed_w = (cm.base_version, w, self._edge_data(w))
             self._heuristics.clear()
         return self._relaxed_w[1]
 
@@ -126,7 +135,7 @@ class GridPlanner:
 
     def _heuristic(self, goal: int) -> tuple[np.ndarray, np.ndarray]:
         self._relaxed_weights()
-        key = (self.costmap.static_version, goal)
+        key = (self.costmap.base_version, goal)
         entry = self._heuristics.get(key)
         if entry is None:
             dist, pred = self._dijkstra(self._relaxed_w[2], goal)
@@ -186,32 +195,72 @@ class GridPlanner:
             return PlanResult(E.NONE, self._finish(pts, goal, smooth=False), 0.0, method="trivial")
 
         w = self._master_weights()
+        h, pred = self._heuristic(g)
+        budget = min(self.params.max_python_expansions, self.params.max_iterations)
         escape = self._blocked(s_cost)
         if escape:  # start inside the inscribed band: let the search leave through it
-            w = self._escape_weights(w, s_rc)
+            w, h = self._escape(w, h, s_rc)
+            p_passable = True
         else:
-            h, pred = self._heuristic(g)
             if math.isinf(h[s]):
                 return PlanResult(E.NO_VALID_PATH, message="start and goal are not connected in the map")
             path = self._trace(pred, s, g)
-            if path is not None and self._matches_relaxed(path):
-                return self._result(path, float(h[s]), "cached", 0, start, goal)
-            budget = min(self.params.max_python_expansions, self.params.max_iterations)
-            found, path, cost, n = self._astar(w, h, s, g, budget)
+            idx = np.asarray(path)
+            wp = w[idx]
+            p_passable = bool(np.isfinite(wp).all())
+            if p_passable:
+                cost = self._path_cost(path, wp)
+                if cost <= float(h[s]) * (1.0 + self.params.suboptimality_tolerance) + 1e-9:
+                    return self._result(path, cost, "cached", 0, start, goal)
+        if p_passable:
+            found, path, cost, n = self._astar(w, h, s, g, budget, prune_inf=True)
             if found:
                 return self._result(path, cost, "astar", n, start, goal)
-            if path is None and n < budget:
-                return PlanResult(E.NO_VALID_PATH, message="no path: the goal is cut off", expansions=n,
-                                  method="astar")
+            if path is None and n <= budget:
+                return PlanResult(E.NO_VALID_PATH, message="no path: the goal is cut off",
+                                  expansions=n, method="astar")
+        else:
+            if not self._connected(w, s, g, escape):
+                return PlanResult(E.NO_VALID_PATH, message="no path: the goal is cut off",
+                                  method="components")
+            learned = self._learned.get(g)
+            if learned is not None:
+                found, path, cost, n = self._astar(w, learned, s, g, budget, prune_inf=False)
+                if found:
+                    return self._result(path, cost, "learned", n, start, goal)
         if self.params.max_iterations < self.Np:
             return PlanResult(E.PLANNER_TIMEOUT, message="search exceeded max_iterations",
                               expansions=self.params.max_iterations)
         dist, pred = self._dijkstra(self._edge_data(w), g)
+        settled = int(np.isfinite(dist).sum())
         if math.isinf(dist[s]):
             return PlanResult(E.NO_VALID_PATH, message="no path between start and goal",
-                              method="dijkstra", expansions=int(np.isfinite(dist).sum()))
+                              method="dijkstra", expansions=settled)
+        if not escape:
+            self._learned[g] = dist
+            while len(self._learned) > self.params.heuristic_cache_size:
+                self._learned.popitem(last=False)
         path = self._trace(pred, s, g)
-        return self._result(path, float(dist[s]), "dijkstra", int(np.isfinite(dist).sum()), start, goal)
+        return self._result(path, float(dist[s]), "dijkstra", settled, start, goal)
+
+    def _path_cost(self, path: list[int], wp: np.ndarray) -> float:
+        steps = np.abs(np.diff(np.asarray(path)))
+        lengths = np.where((steps == 1) | (steps == self.Wp), 1.0, SQRT2)
+        return float((0.5 * lengths * (wp[:-1] + wp[1:])).sum())
+
+    def _connected(self, w: np.ndarray, s: int, g: int, escape: bool) -> bool:
+        """Are start and goal in one 8-connected component of passable cells? (cached per
+        costmap version)"""
+        key = (self.costmap.version, self.params.allow_unknown)
+        if escape or self._labels is None or self._labels[0] != key:
+            passable = np.isfinite(w).reshape(self.Hp, self.Wp)
+            labels, _n = ndimage.label(passable, structure=np.ones((3, 3), bool))
+            labels = labels.ravel()
+            if escape:
+                return bool(labels[s] == labels[g] and labels[s] != 0)
+            self._labels = (key, labels)
+        labels = self._labels[1]
+        return bool(labels[s] == labels[g] and labels[s] != 0)
 
     def _goal_within_tolerance(self, g_rc):
         tol = self.params.tolerance
@@ -231,17 +280,21 @@ class GridPlanner:
                     best, best_d = (r, c), d
         return best
 
-    def _escape_weights(self, w: np.ndarray, s_rc) -> np.ndarray:
-        """Make inscribed (not lethal) cells near the start passable at the highest cost."""
+    def _escape(self, w: np.ndarray, h: np.ndarray, s_rc):
+        """Make inscribed (not lethal) cells near the start passable at the highest cost, with
+        an admissible heuristic of 0 where the relaxed field has none."""
         cm = self.costmap
         w = w.copy()
+        h = h.copy()
         n = math.ceil(cm.inscribed_radius / cm.resolution) + 1
         r0, r1 = max(s_rc[0] - n, 0), min(s_rc[0] + n + 1, self.H)
         c0, c1 = max(s_rc[1] - n, 0), min(s_rc[1] + n + 1, self.W)
-        window = cm.cost[r0:r1, c0:c1]
+        esc = cm.cost[r0:r1, c0:c1] == INSCRIBED
         wv = w.reshape(self.Hp, self.Wp)[r0 + 1:r1 + 1, c0 + 1:c1 + 1]
-        wv[window == INSCRIBED] = 1.0 + self.params.cost_penalty * INSCRIBED / 252.0
-        return w
+        wv[esc] = 1.0 + self.params.cost_penalty * INSCRIBED / 252.0
+        hv = h.reshape(self.Hp, self.Wp)[r0 + 1:r1 + 1, c0 + 1:c1 + 1]
+        hv[esc & np.isinf(hv)] = 0.0
+        return w, h
 
     def _trace(self, pred: np.ndarray, s: int, g: int) -> list[int] | None:
         path = [s]
@@ -254,13 +307,11 @@ class GridPlanner:
             path.append(p)
         return path
 
-    def _matches_relaxed(self, path: list[int]) -> bool:
-        idx = np.asarray(path)
-        return bool(np.array_equal(self._master_weights()[idx], self._relaxed_weights()[idx]))
-
-    def _astar(self, w_arr: np.ndarray, h_arr: np.ndarray, s: int, g: int, budget: int):
-        """A* with a consistent heuristic. Returns (found, path, cost, expansions); path None
-        and expansions < budget means the open list ran dry (no path)."""
+    def _astar(self, w_arr: np.ndarray, h_arr: np.ndarray, s: int, g: int, budget: int,
+               prune_inf: bool = True):
+        """A*. Returns (found, path, cost, expansions); (False, None, ...) = the open list ran
+        dry, which proves "no path" only with an admissible heuristic (``prune_inf``: a cell
+        with an infinite heuristic cannot reach the goal and is skipped)."""
         w = memoryview(w_arr)
         h = memoryview(h_arr)
         inf = math.inf
@@ -290,11 +341,13 @@ class GridPlanner:
             for off, L in offs:
                 v = u + off
                 wv = w[v]
-                if wv == inf or v in closed:
+                if wv == inf:
                     continue
                 hv = h[v]
                 if hv == inf:
-                    continue
+                    if prune_inf:
+                        continue
+                    hv = 0.0
                 ng = gu + L * 0.5 * (wu + wv)
                 if ng < gs.get(v, inf):
                     gs[v] = ng
