@@ -29,9 +29,10 @@ ROOT = FsPath(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
+from nav_fixture import HOUSE, KinematicRobot, small_world  # noqa: E402
+
 from bt_runtime.runtime.clock import run  # noqa: E402
 from bt_runtime.runtime.messages import LaserScan, Pose2D, Twist  # noqa: E402
-from nav_fixture import HOUSE, KinematicRobot, small_world  # noqa: E402
 from sim.bus import Bus  # noqa: E402
 from sim.nav.controller import GoalChecker, RegulatedPurePursuit  # noqa: E402
 from sim.nav.costmap import GlobalCostmap, LocalCostmap  # noqa: E402
