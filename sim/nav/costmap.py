@@ -139,6 +139,10 @@ class Costmap2D:
         self.resolution = float(resolution)
         self.origin_x = float(origin_x)
         self.origin_y = float(origin_y)
+        # cell indices are computed against a fixed base (the map's origin) minus an integer
+        # offset, so a rolling window agrees exactly with the global grid on cell boundaries
+        self._bx, self._by = self.origin_x, self.origin_y
+        self._or = self._oc = 0
         self.params = params
         self.robot_radius = float(robot_radius)
         self.inscribed_radius = robot_radius + params.footprint_padding
@@ -151,8 +155,8 @@ class Costmap2D:
 
     # -- geometry ---------------------------------------------------------------------------
     def world_to_cell(self, x: float, y: float) -> tuple[int, int]:
-        return (math.floor((y - self.origin_y) / self.resolution),
-                math.floor((x - self.origin_x) / self.resolution))
+        return (math.floor((y - self._by) / self.resolution) - self._or,
+                math.floor((x - self._bx) / self.resolution) - self._oc)
 
     def cell_to_world(self, row, col):
         x = self.origin_x + (np.asarray(col, dtype=float) + 0.5) * self.resolution
@@ -172,8 +176,8 @@ class Costmap2D:
         return NO_INFORMATION
 
     def costs_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-        r = np.floor((np.asarray(ys) - self.origin_y) / self.resolution).astype(np.intp)
-        c = np.floor((np.asarray(xs) - self.origin_x) / self.resolution).astype(np.intp)
+        r = np.floor((np.asarray(ys) - self._by) / self.resolution).astype(np.intp) - self._or
+        c = np.floor((np.asarray(xs) - self._bx) / self.resolution).astype(np.intp) - self._oc
         inside = (r >= 0) & (r < self.height) & (c >= 0) & (c < self.width)
         out = np.full(r.shape, NO_INFORMATION, np.uint8)
         out[inside] = self.cost[r[inside], c[inside]]
@@ -209,12 +213,12 @@ class Costmap2D:
         res = self.resolution
         t = np.arange(min_len, tmax, res)
         inv = 1.0 / res
-        fc = (x0 - self.origin_x) * inv + np.outer(cos, t * inv)
-        fr = (y0 - self.origin_y) * inv + np.outer(sin, t * inv)
+        fc = (x0 - self._bx) * inv + np.outer(cos, t * inv)
+        fr = (y0 - self._by) * inv + np.outer(sin, t * inv)
         keep = t[None, :] < lengths[:, None]
         fc, fr = fc[keep], fr[keep]
-        c = np.floor(fc).astype(np.intp)
-        r = np.floor(fr).astype(np.intp)
+        c = np.floor(fc).astype(np.intp) - self._oc
+        r = np.floor(fr).astype(np.intp) - self._or
         inside = (r >= 0) & (r < self.height) & (c >= 0) & (c < self.width)
         return r[inside] * self.width + c[inside]
 
@@ -223,8 +227,8 @@ class Costmap2D:
         rr = r[mark]
         hx = x0 + cos[mark] * rr
         hy = y0 + sin[mark] * rr
-        rows = np.floor((hy - self.origin_y) / self.resolution).astype(np.intp)
-        cols = np.floor((hx - self.origin_x) / self.resolution).astype(np.intp)
+        rows = np.floor((hy - self._by) / self.resolution).astype(np.intp) - self._or
+        cols = np.floor((hx - self._bx) / self.resolution).astype(np.intp) - self._oc
         inside = (rows >= 0) & (rows < self.height) & (cols >= 0) & (cols < self.width)
         return rows[inside] * self.width + cols[inside]
 
@@ -426,6 +430,7 @@ class LocalCostmap(Costmap2D):
         self._gi, self._gj, self._placed = gi, gj, True
         self.origin_x = m.origin_x + gj * self.resolution
         self.origin_y = m.origin_y + gi * self.resolution
+        self._bx, self._by, self._or, self._oc = m.origin_x, m.origin_y, gi, gj
         return True
 
     def _map_slice(self, layer: np.ndarray) -> np.ndarray:
@@ -486,16 +491,16 @@ class LocalCostmap(Costmap2D):
 
     # -- fast scalar queries (controller hot path) ---------------------------------------
     def cost_at(self, x: float, y: float) -> int:
-        c = math.floor((x - self.origin_x) / self.resolution)
-        r = math.floor((y - self.origin_y) / self.resolution)
+        c = math.floor((x - self._bx) / self.resolution) - self._oc
+        r = math.floor((y - self._by) / self.resolution) - self._or
         if 0 <= r < self.height and 0 <= c < self.width:
             return self._cost_bytes[r * self.width + c]
         return NO_INFORMATION
 
     def distance_at(self, x: float, y: float) -> float:
         """Metres to the nearest lethal cell (inf outside the window or with none)."""
-        c = math.floor((x - self.origin_x) / self.resolution)
-        r = math.floor((y - self.origin_y) / self.resolution)
+        c = math.floor((x - self._bx) / self.resolution) - self._oc
+        r = math.floor((y - self._by) / self.resolution) - self._or
         if 0 <= r < self.height and 0 <= c < self.width:
             return float(self.dist[r, c])
         return math.inf
