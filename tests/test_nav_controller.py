@@ -15,7 +15,10 @@ from sim.nav.occupancy import OccupancyGrid
 from sim.nav.params import BehaviorParams, ControllerParams, RobotParams
 
 
-def setup(pose=Pose2D(2.0, 3.0, 0.0)):
+HOME = Pose2D(2.0, 3.0, 0.0)
+
+
+def setup(pose=HOME):
     grid = OccupancyGrid(np.zeros((120, 200), np.int8), 0.05, (0.0, 0.0, 0.0))
     lc = LocalCostmap(GlobalCostmap(grid, 0.1), 0.1)
     lc.update(pose)
