@@ -14,7 +14,6 @@ from sim.nav.costmap import GlobalCostmap, LocalCostmap
 from sim.nav.occupancy import OccupancyGrid
 from sim.nav.params import BehaviorParams, ControllerParams, RobotParams
 
-
 HOME = Pose2D(2.0, 3.0, 0.0)
 
 
