@@ -156,3 +156,127 @@ class NavParams(_Model):
     def from_yaml(cls, path: str | Path) -> NavParams:
         data = yaml.safe_load(Path(path).read_text()) or {}
         return cls.model_validate(data)
+
+
+# ------------------------------------------------------------------------------------------
+# Reading a Nav2 parameter file (nav2_bringup / turtlebot3_navigation2 style)
+# ------------------------------------------------------------------------------------------
+
+_RPP_KEYS = set(ControllerParams.model_fields) - {
+    "controller_frequency", "failure_tolerance", "xy_goal_tolerance", "yaw_goal_tolerance",
+    "stateful_goal_checker", "path_length_tolerance", "required_movement_radius",
+    "movement_time_allowance", "pose_stale_timeout", "pose_abort_timeout"}
+
+
+def _node(doc: dict, *names: str) -> dict:
+    """``doc[name]['ros__parameters']``, also for the nested ``costmap: costmap:`` form."""
+    cur: object = doc
+    for n in names:
+        cur = cur.get(n, {}) if isinstance(cur, dict) else {}
+    return cur.get("ros__parameters", {}) if isinstance(cur, dict) else {}
+
+
+def _plugin(node: dict, list_key: str, kind: str) -> dict:
+    """The first plugin block in ``node[list_key]`` (or any block) whose type contains ``kind``."""
+    names = node.get(list_key) or [k for k, v in node.items() if isinstance(v, dict)]
+    for name in names:
+        block = node.get(name)
+        if isinstance(block, dict) and kind in str(block.get("plugin", "")):
+            return block
+    return {}
+
+
+def _costmap(node: dict, base: dict) -> dict:
+    out = dict(base)
+    for key in ("footprint_padding", "track_unknown_space", "update_frequency", "width", "height"):
+        if key in node and (key in ("width", "height") or key in CostmapParams.model_fields):
+            out[key] = node[key]
+    infl = _plugin(node, "plugins", "InflationLayer")
+    for key in ("inflation_radius", "cost_scaling_factor"):
+        if key in infl:
+            out[key] = infl[key]
+    obs = _plugin(node, "plugins", "ObstacleLayer") or _plugin(node, "plugins", "VoxelLayer")
+    sources = str(obs.get("observation_sources", "")).split()
+    src = obs.get(sources[0], {}) if sources else {}
+    for key in ("obstacle_max_range", "obstacle_min_range", "raytrace_max_range",
+                "raytrace_min_range", "inf_is_valid"):
+        if key in src:
+            out[key] = src[key]
+    if "footprint_clearing_enabled" in obs:
+        out["footprint_clearing_enabled"] = obs["footprint_clearing_enabled"]
+    plugins = [str(node.get(p, {}).get("plugin", "")) for p in node.get("plugins", [])
+               if isinstance(node.get(p), dict)]
+    if plugins:
+        out["use_static_layer"] = any("StaticLayer" in p for p in plugins)
+        out["use_obstacle_layer"] = any("ObstacleLayer" in p or "VoxelLayer" in p for p in plugins)
+    return out
+
+
+def load_nav2_params(path: str | Path, base: NavParams | None = None,
+                     robot: RobotParams | None = None) -> tuple[RobotParams, NavParams]:
+    """Read the parts of a Nav2 parameter YAML this stand-in understands (costmaps, controller
+    server + RPP/DWB/MPPI velocity limits, goal/progress checkers, planner, behaviour server).
+    Everything else keeps the defaults of ``base`` / ``robot``."""
+    doc = yaml.safe_load(Path(path).read_text()) or {}
+    nav = (base or NavParams()).model_dump()
+    rob = (robot or RobotParams()).model_dump()
+
+    lc = _node(doc, "local_costmap", "local_costmap")
+    gc = _node(doc, "global_costmap", "global_costmap")
+    nav["local_costmap"] = _costmap(lc, nav["local_costmap"])
+    nav["global_costmap"] = _costmap(gc, nav["global_costmap"])
+    for key in ("width", "height"):
+        nav["global_costmap"].pop(key, None)
+    radius = gc.get("robot_radius", lc.get("robot_radius"))
+    if radius is not None:
+        rob["radius"] = radius
+
+    cs = _node(doc, "controller_server")
+    ctrl = nav["controller"]
+    for key in ("controller_frequency", "failure_tolerance"):
+        if key in cs:
+            ctrl[key] = cs[key]
+    pc = _plugin(cs, "progress_checker_plugins", "ProgressChecker")
+    for key in ("required_movement_radius", "movement_time_allowance"):
+        if key in pc:
+            ctrl[key] = pc[key]
+    gch = _plugin(cs, "goal_checker_plugins", "GoalChecker")
+    for key in ("xy_goal_tolerance", "yaw_goal_tolerance", "path_length_tolerance"):
+        if key in gch:
+            ctrl[key] = gch[key]
+    if "stateful" in gch:
+        ctrl["stateful_goal_checker"] = gch["stateful"]
+    fp = next((cs[n] for n in cs.get("controller_plugins", []) if isinstance(cs.get(n), dict)), {})
+    kind = str(fp.get("plugin", ""))
+    if "RegulatedPurePursuit" in kind:
+        for key in _RPP_KEYS:
+            if key in fp:
+                ctrl[key] = fp[key]
+        vel = fp.get("desired_linear_vel", fp.get("max_linear_vel"))  # Humble / Jazzy names
+        if vel is not None:
+            ctrl["desired_linear_vel"] = vel
+            rob["max_linear_vel"] = max(rob["max_linear_vel"], vel)
+    elif "DWB" in kind:
+        for src, dst in (("max_vel_x", "max_linear_vel"), ("max_vel_theta", "max_angular_vel"),
+                         ("acc_lim_x", "max_linear_accel"), ("acc_lim_theta", "max_angular_accel")):
+            if src in fp:
+                rob[dst] = abs(fp[src])
+    elif "MPPI" in kind:
+        for src, dst in (("vx_max", "max_linear_vel"), ("wz_max", "max_angular_vel"),
+                         ("ax_max", "max_linear_accel"), ("az_max", "max_angular_accel")):
+            if src in fp:
+                rob[dst] = abs(fp[src])
+
+    ps = _node(doc, "planner_server")
+    gb = next((ps[n] for n in ps.get("planner_plugins", []) if isinstance(ps.get(n), dict)), {})
+    # deliberately not copied: NavFn's "tolerance" (see PlannerParams.tolerance)
+    for key in ("allow_unknown", "cost_penalty"):
+        if key in gb:
+            nav["planner"][key] = gb[key]
+
+    bs = _node(doc, "behavior_server") or _node(doc, "recoveries_server")
+    for key in ("cycle_frequency", "simulate_ahead_time", "max_rotational_vel",
+                "min_rotational_vel", "rotational_acc_lim"):
+        if key in bs:
+            nav["behaviors"][key] = bs[key]
+    return RobotParams.model_validate(rob), NavParams.model_validate(nav)

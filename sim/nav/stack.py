@@ -118,7 +118,11 @@ class NavComponent:
     async def wait_change(self) -> None:
         fut = asyncio.get_running_loop().create_future()
         self._waiters.append(fut)
-        await fut
+        try:
+            await fut
+        finally:
+            if fut in self._waiters:
+                self._waiters.remove(fut)
 
 
 class NavHandle:
@@ -275,13 +279,21 @@ class NavStack:
     def _now(self) -> float:
         return asyncio.get_running_loop().time()
 
+    @staticmethod
+    def _receipt_time(stamp: float) -> float:
+        """When a message arrived: the loop's clock, or its stamp outside a running loop."""
+        try:
+            return asyncio.get_running_loop().time()
+        except RuntimeError:
+            return stamp
+
     def _on_pose(self, msg: LocalizedPose) -> None:
         self._pose = msg.pose
-        self._pose_time = self._now()
+        self._pose_time = self._receipt_time(msg.stamp)
 
     def _on_odom(self, msg: Odometry) -> None:
         self._odom = msg
-        self._odom_time = self._now()
+        self._odom_time = self._receipt_time(msg.stamp)
 
     def _on_scan(self, msg: LaserScan) -> None:
         self._scan = msg
@@ -764,7 +776,9 @@ class NavStack:
         try:
             await self._gate(comp, gen)
             while loop.time() < end - 1e-9:
-                await asyncio.sleep(end - loop.time())
+                # sleep, but wake up if the behavior server crashes, hangs or restarts
+                with contextlib.suppress(asyncio.TimeoutError):
+                    await asyncio.wait_for(comp.wait_change(), end - loop.time())
                 await self._gate(comp, gen)
             return _ok()
         except _ComponentDown as e:
