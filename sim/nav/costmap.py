@@ -206,19 +206,28 @@ class Costmap2D:
     def _ray_cells(self, x0: float, y0: float, cos: np.ndarray, sin: np.ndarray,
                    lengths: np.ndarray, min_len: float = 0.0):
         """Flat indices of the in-bounds cells sampled along each beam from ``min_len`` up to
-        (not including) its length, every resolution."""
-        tmax = float(lengths.max(initial=0.0))
-        if tmax <= min_len:
-            return np.empty(0, np.intp)
+        (not including) its length, every resolution. Beams are first clipped where they leave
+        the grid, so only samples inside it are generated."""
         res = self.resolution
-        t = np.arange(min_len, tmax, res)
+        # clip each beam at the grid's border (slab method; the origin may be outside)
+        x_lo = self._bx + self._oc * res
+        y_lo = self._by + self._or * res
+        x_hi, y_hi = x_lo + self.width * res, y_lo + self.height * res
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tx = np.where(cos > 0, (x_hi - x0) / cos, np.where(cos < 0, (x_lo - x0) / cos, np.inf))
+            ty = np.where(sin > 0, (y_hi - y0) / sin, np.where(sin < 0, (y_lo - y0) / sin, np.inf))
+        lengths = np.minimum(lengths, np.minimum(tx, ty))
+        counts = np.ceil((lengths - min_len) / res).astype(np.intp)
+        np.maximum(counts, 0, out=counts)
+        total = int(counts.sum())
+        if total == 0:
+            return np.empty(0, np.intp)
+        beam = np.repeat(np.arange(len(counts)), counts)
+        starts = np.cumsum(counts) - counts
+        t = (np.arange(total) - np.repeat(starts, counts)) * res + min_len
         inv = 1.0 / res
-        fc = (x0 - self._bx) * inv + np.outer(cos, t * inv)
-        fr = (y0 - self._by) * inv + np.outer(sin, t * inv)
-        keep = t[None, :] < lengths[:, None]
-        fc, fr = fc[keep], fr[keep]
-        c = np.floor(fc).astype(np.intp) - self._oc
-        r = np.floor(fr).astype(np.intp) - self._or
+        c = np.floor((x0 - self._bx) * inv + cos[beam] * (t * inv)).astype(np.intp) - self._oc
+        r = np.floor((y0 - self._by) * inv + sin[beam] * (t * inv)).astype(np.intp) - self._or
         inside = (r >= 0) & (r < self.height) & (c >= 0) & (c < self.width)
         return r[inside] * self.width + c[inside]
 
@@ -332,9 +341,12 @@ class GlobalCostmap(Costmap2D):
         flat[clear] = FREE_SPACE
         flat[hits] = LETHAL
         flat[fp] = FREE_SPACE
-        if np.array_equal(before, self.obstacle[r0:r1, c0:c1]):
+        changed = before != self.obstacle[r0:r1, c0:c1]
+        if not changed.any():
             return False
-        return self._recompute_window(int(r0), int(r1), int(c0), int(c1))
+        rr, cc = np.nonzero(changed)
+        return self._recompute_window(int(r0 + rr.min()), int(r0 + rr.max() + 1),
+                                      int(c0 + cc.min()), int(c0 + cc.max() + 1))
 
     # -- services ------------------------------------------------------------------------
     def clear(self) -> None:
