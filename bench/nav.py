@@ -183,10 +183,28 @@ def bench_end_to_end(world: OccupancyGrid, start: Pose2D, goal: Pose2D) -> None:
         await robot.stop()
         return result, sim, wall, robot.pose.distance_to(goal)
 
+    async def robot_only(duration: float):
+        bus = Bus()
+        robot = KinematicRobot(bus, world, start, scan_noise=0.01).start()
+        bus.subscribe("scan", lambda _m: None)
+        loop = asyncio.get_running_loop()
+        w0 = time.perf_counter()
+        t_end = loop.time() + duration
+        while loop.time() < t_end:  # a command stream like the controller's (20 Hz)
+            bus.publish("nav_cmd_vel", Twist(0.0, 0.0))
+            await asyncio.sleep(0.05)
+        wall = time.perf_counter() - w0
+        await robot.stop()
+        return wall
+
     result, sim, wall, err = run(main())
+    fixture = run(robot_only(sim))
+    nav = max(wall - fixture, 1e-9)
     print(f"end to end: navigate_to_pose with the kinematic robot (100 Hz physics, 5 Hz scans): "
           f"{result.status.value}, {sim:.1f} sim s in {wall:.2f} wall s = {sim / wall:.0f}x real time, "
           f"final error {err:.2f} m")
+    print(f"  of which the test robot alone takes {fixture:.2f} s: the navigation stack runs at "
+          f"~{sim / nav:.0f}x real time ({nav / sim * 1e3:.1f} ms of CPU per simulated second)")
 
 
 def main() -> None:

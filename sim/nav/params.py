@@ -89,7 +89,7 @@ class ControllerParams(_Model):
     min_lookahead_dist: float = 0.3  # [nav2]
     max_lookahead_dist: float = 0.9  # [nav2]
     lookahead_time: float = 1.5  # [nav2]
-    use_velocity_scaled_lookahead_dist: bool = False  # [nav2]
+    use_velocity_scaled_lookahead_dist: bool = True  # [brief] (Nav2 code default: false)
     rotate_to_heading_angular_vel: float = 1.8  # [nav2] (clamped to the robot's max)
     use_rotate_to_heading: bool = True  # [nav2]
     rotate_to_heading_min_angle: float = 0.785  # [nav2]

@@ -229,14 +229,22 @@ class NavStack:
         self._handles: set[NavHandle] = set()
         self._heartbeat_task: asyncio.Task | None = None
         self._restart_tasks: dict[str, asyncio.Task] = {}
-        self._unsubs = [bus.subscribe("pose", self._on_pose), bus.subscribe("odom", self._on_odom),
-                        bus.subscribe("scan", self._on_scan)]
+        self._unsubs: list[Callable[[], None]] = []
+        self._subscribe()
         self.current_plan: Path | None = None
 
     # ------------------------------------------------------------------------------------
     # lifecycle
     # ------------------------------------------------------------------------------------
+    def _subscribe(self) -> None:
+        if not self._unsubs:
+            self._unsubs = [self.bus.subscribe("pose", self._on_pose),
+                            self.bus.subscribe("odom", self._on_odom),
+                            self.bus.subscribe("scan", self._on_scan)]
+
     async def start(self) -> None:
+        """Start the heartbeats (actions also start them on first use)."""
+        self._subscribe()
         self._ensure_started()
 
     def _ensure_started(self) -> None:
