@@ -456,8 +456,21 @@ class NavStack:
             self._motion = handle
         handle._task = loop.create_task(coro, name=f"nav.{handle.kind}")
         self._handles.add(handle)
-        handle._task.add_done_callback(lambda _t, h=handle: self._handles.discard(h))
+        handle._task.add_done_callback(lambda t, h=handle: self._action_done(h, t))
         return handle
+
+    def _action_done(self, handle: NavHandle, task: asyncio.Task) -> None:
+        self._handles.discard(handle)
+        if not task.cancelled() and task.exception() is not None:
+            exc = task.exception()
+            log.error("nav_action_failed", action=handle.kind, error=repr(exc),
+                      exc_info=(type(exc), exc, exc.__traceback__))
+            if self._motion is handle:
+                self._publish(ZERO_TWIST)  # never leave a stale command behind an internal error
+        elif not task.cancelled():
+            res = task.result()
+            log.debug("nav_action_done", action=handle.kind, status=res.status.value,
+                      code=res.error_code.name, msg=res.error_msg)
 
     def navigate_to_pose(self, goal: Pose2D, *, behavior_tree: str = "",
                          feedback: Callable[[NavFeedback], None] | None = None) -> NavHandle:
