@@ -314,8 +314,8 @@ def test_hung_planner_during_navigation_keeps_following_the_old_path():
 
 def test_cancel_all_and_speed_limit():
     async def main():
-        async with rig() as (_bus, robot, nav):
-            nav.set_speed_limit(0.1)
+        async with rig() as (bus, robot, nav):
+            bus.publish("nav_speed_limit", (40.0, True))  # 40 % of 0.25 m/s
             h = nav.navigate_to_pose(GOAL)
             w = nav.wait(100.0)
             await asyncio.sleep(4.0)

@@ -240,7 +240,8 @@ class NavStack:
         if not self._unsubs:
             self._unsubs = [self.bus.subscribe("pose", self._on_pose),
                             self.bus.subscribe("odom", self._on_odom),
-                            self.bus.subscribe("scan", self._on_scan)]
+                            self.bus.subscribe("scan", self._on_scan),
+                            self.bus.subscribe("nav_speed_limit", self._on_speed_limit)]
 
     async def start(self) -> None:
         """Start the heartbeats (actions also start them on first use)."""
@@ -302,6 +303,14 @@ class NavStack:
     def _on_odom(self, msg: Odometry) -> None:
         self._odom = msg
         self._odom_time = self._receipt_time(msg.stamp)
+
+    def _on_speed_limit(self, msg: Any) -> None:
+        """Nav2's SpeedLimit topic: a float (m/s; None or <= 0 lifts the limit) or a
+        ``(limit, percentage)`` pair."""
+        if isinstance(msg, tuple):
+            self.set_speed_limit(msg[0], bool(msg[1]))
+        else:
+            self.set_speed_limit(msg)
 
     def _on_scan(self, msg: LaserScan) -> None:
         self._scan = msg
