@@ -658,7 +658,9 @@ class DecoratorNode(TreeNode):
 
     __slots__ = ("child",)
     node_type = NodeType.DECORATOR
-    _bare_tick_ok = False  # execute_tick resets a completed child afterwards
+    # execute_tick resets a completed child afterwards; subclasses whose tick() always does
+    # that itself may set _bare_tick_ok = True.
+    _bare_tick_ok = False
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self.child: TreeNode | None = None

@@ -27,13 +27,14 @@ from .decorators import (
 )
 from .loops import LoopBoolNode, LoopDoubleNode, LoopIntNode, LoopStringNode
 from .parallel import ParallelAllNode, ParallelNode
-from .reactive import ReactiveFallbackNode, ReactiveSequenceNode
+from .reactive import ReactiveFallbackNode, ReactiveNode, ReactiveSequenceNode
 from .sequences import (
     AsyncFallbackNode,
     AsyncSequenceNode,
     FallbackNode,
     SequenceNode,
     SequenceWithMemoryNode,
+    SequentialNode,
 )
 from .timing import DelayNode, SleepNode, TimeoutNode
 from .updates import SkipUnlessUpdatedNode, WaitValueUpdateNode, WasEntryUpdatedNode
@@ -91,6 +92,12 @@ BUILTIN_NODES = {
 }
 
 
+_CLASS_OF = {"Fallback": SequentialNode, "AsyncFallback": SequentialNode, "Sequence": SequentialNode,
+             "AsyncSequence": SequentialNode, "ReactiveSequence": ReactiveNode,
+             "ReactiveFallback": ReactiveNode}
+
+
 def register_builtins(factory: BehaviorTreeFactory) -> None:
-    for registration_id, cls in BUILTIN_NODES.items():
-        factory.register_builder(manifest_for(cls, registration_id, builtin=True), cls)
+    for registration_id, builder in BUILTIN_NODES.items():
+        cls = _CLASS_OF.get(registration_id, builder)
+        factory.register_builder(manifest_for(cls, registration_id, builtin=True), builder)

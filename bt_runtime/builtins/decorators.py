@@ -14,6 +14,8 @@ def _idle(node: DecoratorNode) -> LogicError:
 
 
 class InverterNode(DecoratorNode):
+    _bare_tick_ok = True  # tick() resets a completed child itself
+
     def tick(self) -> NodeStatus:
         self.set_status(RUNNING)
         status = self.child.execute_tick()
@@ -29,6 +31,8 @@ class InverterNode(DecoratorNode):
 
 
 class ForceSuccessNode(DecoratorNode):
+    _bare_tick_ok = True  # tick() resets a completed child itself
+
     _forced = SUCCESS
 
     def tick(self) -> NodeStatus:
@@ -45,6 +49,8 @@ class ForceFailureNode(ForceSuccessNode):
 
 
 class KeepRunningUntilFailureNode(DecoratorNode):
+    _bare_tick_ok = True  # tick() resets a completed child itself
+
     def tick(self) -> NodeStatus:
         self.set_status(RUNNING)
         status = self.child.execute_tick()
@@ -61,6 +67,8 @@ class KeepRunningUntilFailureNode(DecoratorNode):
 
 class RepeatNode(DecoratorNode):
     """Repeat a successful child ``num_cycles`` times (-1: forever)."""
+
+    _bare_tick_ok = True  # tick() resets a completed child itself
 
     @classmethod
     def provided_ports(cls):
@@ -110,6 +118,8 @@ class RepeatNode(DecoratorNode):
 
 class RetryNode(DecoratorNode):
     """Retry a failing child up to ``num_attempts`` times (-1: forever)."""
+
+    _bare_tick_ok = True  # tick() resets a completed child itself
 
     @classmethod
     def provided_ports(cls):
@@ -162,6 +172,8 @@ class RunOnceNode(DecoratorNode):
     """Run the child to completion once for the life of the node; then skip (or repeat the
     remembered status when ``then_skip`` is false)."""
 
+    _bare_tick_ok = True  # tick() resets a completed child itself
+
     @classmethod
     def provided_ports(cls):
         return [input_port("then_skip", bool, True,
@@ -189,6 +201,8 @@ class RunOnceNode(DecoratorNode):
 class PreconditionNode(DecoratorNode):
     """Tick the child only if the ``if`` script is true, else return ``else``; the script is
     not re-checked while the child runs (and, as in BT.CPP, not after a halt either)."""
+
+    _bare_tick_ok = True  # tick() resets a completed child itself
 
     @classmethod
     def provided_ports(cls):
@@ -233,6 +247,8 @@ class PreconditionNode(DecoratorNode):
 
 class SubTreeNode(DecoratorNode):
     """The node standing for an expanded <SubTree>; its child is the subtree's root."""
+
+    _bare_tick_ok = True  # tick() resets a completed child itself
 
     node_type = NodeType.SUBTREE
     subtree_id = ""

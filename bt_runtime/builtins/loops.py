@@ -30,6 +30,8 @@ from ..status import FAILURE, IDLE, RUNNING, SUCCESS, NodeStatus
 
 
 class LoopNode(DecoratorNode):
+    _bare_tick_ok = True  # tick() resets a completed child itself
+
     element: PortType = INT
 
     @classmethod

@@ -11,14 +11,17 @@ from ..node import ControlNode, NodeConfig
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
 
-class _ReactiveBase(ControlNode):
-    throw_if_multiple_running = False  # BT.CPP's process-wide EnableException flag
-    _stop_on: NodeStatus = FAILURE
-    _otherwise: NodeStatus = SUCCESS
-    _label = "ReactiveSequence"
+class ReactiveNode(ControlNode):
+    """ReactiveSequence (stop on FAILURE) and ReactiveFallback (stop on SUCCESS): one class,
+    configured per instance, so this hot loop stays monomorphic."""
 
-    def __init__(self, name: str, config: NodeConfig | None = None):
+    __slots__ = ("_running_child", "_stop_on", "_otherwise", "_label")
+    throw_if_multiple_running = False  # BT.CPP's process-wide EnableException flag
+
+    def __init__(self, name: str, config: NodeConfig | None = None, *, fallback: bool = False):
         self._running_child = -1
+        self._stop_on, self._otherwise = (SUCCESS, FAILURE) if fallback else (FAILURE, SUCCESS)
+        self._label = "ReactiveFallback" if fallback else "ReactiveSequence"
         super().__init__(name, config)
 
     @classmethod
@@ -58,9 +61,16 @@ class _ReactiveBase(ControlNode):
             if status is not SKIPPED:
                 all_skipped = False
             if status is RUNNING:
-                for other in range(len(children)):
-                    if other != index:
-                        self.halt_child(other)
+                for other in children:  # halt/reset every other child (halt_child, inlined)
+                    if other is not child:
+                        other_status = other._status
+                        if other_status is not IDLE:
+                            if other_status is RUNNING:
+                                other.halt_node()
+                            if other._subscribers:
+                                other.reset_status()
+                            else:
+                                other._status = IDLE
                 if self._running_child == -1:
                     self._running_child = index
                 elif self.throw_if_multiple_running and self._running_child != index:
@@ -82,13 +92,11 @@ class _ReactiveBase(ControlNode):
         ControlNode.halt(self)
 
 
-class ReactiveSequenceNode(_ReactiveBase):
-    _stop_on = FAILURE
-    _otherwise = SUCCESS
-    _label = "ReactiveSequence"
+def ReactiveSequenceNode(name: str, config: NodeConfig | None = None) -> ReactiveNode:  # noqa: N802
+    """Re-tick every child each tick; a FAILURE halts the running child."""
+    return ReactiveNode(name, config)
 
 
-class ReactiveFallbackNode(_ReactiveBase):
-    _stop_on = SUCCESS
-    _otherwise = FAILURE
-    _label = "ReactiveFallback"
+def ReactiveFallbackNode(name: str, config: NodeConfig | None = None) -> ReactiveNode:  # noqa: N802
+    """Re-tick every child each tick; a SUCCESS halts the running child."""
+    return ReactiveNode(name, config, fallback=True)

@@ -17,30 +17,32 @@ def _idle_child(node: ControlNode) -> LogicError:
     return LogicError(f"[{node.name}]: A children should not return IDLE")
 
 
-class _SequentialNode(ControlNode):
-    """Sequence and Fallback are mirror images: tick children in order, remembering the
-    current index; ``_advance_on`` moves to the next child, ``_stop_on`` ends the node."""
+class SequentialNode(ControlNode):
+    """Sequence, Fallback and their Async variants are one algorithm: tick children in
+    order, remembering the current index; ``_advance_on`` moves to the next child,
+    ``_stop_on`` ends the node. One class (configured per instance) keeps the attribute
+    sites in this hot loop monomorphic, which CPython's specializer rewards."""
 
     # Hot attributes live in slots: CPython 3.11 reads slots much faster than class
     # constants looked up through an instance that also has a __dict__.
-    __slots__ = ("_idx", "_skipped", "_advance_on", "_stop_on", "_all_done", "_asynch")
-    asynch = False
-    advance_on: NodeStatus = SUCCESS
-    stop_on: NodeStatus = FAILURE
-    all_done: NodeStatus = SUCCESS
+    __slots__ = ("_idx", "_skipped", "_advance_on", "_stop_on", "_all_done", "_asynch", "kind")
 
-    def __init__(self, name: str, config: NodeConfig | None = None):
+    def __init__(self, name: str, config: NodeConfig | None = None, *, fallback: bool = False,
+                 asynch: bool = False):
         self._idx = 0
         self._skipped = 0
-        cls = type(self)
-        self._advance_on, self._stop_on, self._all_done = cls.advance_on, cls.stop_on, cls.all_done
-        self._asynch = cls.asynch
+        if fallback:
+            self._advance_on, self._stop_on, self._all_done = FAILURE, SUCCESS, FAILURE
+        else:
+            self._advance_on, self._stop_on, self._all_done = SUCCESS, FAILURE, SUCCESS
+        self._asynch = asynch
+        self.kind = ("Async" if asynch else "") + ("Fallback" if fallback else "Sequence")
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
         current = self._status
         if current is not RUNNING:
-            if current is IDLE:
+            if current is IDLE and self._skipped:
                 self._skipped = 0
             if self._subscribers:
                 self.set_status(RUNNING)
@@ -79,19 +81,33 @@ class _SequentialNode(ControlNode):
                 self._idx = idx
                 return RUNNING
             elif status is self._stop_on:
-                self.reset_children()
-                self._idx = 0
-                return status
+                if idx:
+                    self._idx = 0
+                break
             elif status is SKIPPED:
                 idx += 1
                 self._skipped += 1
             else:
                 raise _idle_child(self)
-        all_skipped = self._skipped == n
-        self.reset_children()
-        self._idx = 0
-        self._skipped = 0
-        return SKIPPED if all_skipped else self._all_done
+        else:
+            skipped = self._skipped
+            if skipped:
+                status = SKIPPED if skipped == n else self._all_done
+                self._skipped = 0
+            else:
+                status = self._all_done
+            if idx:
+                self._idx = 0
+        for child in children:  # reset_children(), inlined for speed
+            child_status = child._status
+            if child_status is not IDLE:
+                if child_status is RUNNING:
+                    child.halt_node()
+                if child._subscribers:
+                    child.reset_status()
+                else:
+                    child._status = IDLE
+        return status
 
     def halt(self) -> None:
         self._idx = 0
@@ -99,12 +115,14 @@ class _SequentialNode(ControlNode):
         ControlNode.halt(self)
 
 
-class SequenceNode(_SequentialNode):
+def SequenceNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
     """Tick children in order; FAILURE stops and restarts from the first child next time."""
+    return SequentialNode(name, config)
 
 
-class AsyncSequenceNode(SequenceNode):
-    asynch = True
+def AsyncSequenceNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
+    """Like Sequence, but yields (RUNNING + wake-up) after each synchronous child success."""
+    return SequentialNode(name, config, asynch=True)
 
 
 class SequenceWithMemoryNode(ControlNode):
@@ -154,13 +172,11 @@ class SequenceWithMemoryNode(ControlNode):
         ControlNode.halt(self)  # the index is kept on purpose (BT.CPP behaviour)
 
 
-class FallbackNode(_SequentialNode):
+def FallbackNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
     """Tick children in order until one succeeds; FAILURE moves on to the next child."""
-
-    advance_on = FAILURE
-    stop_on = SUCCESS
-    all_done = FAILURE
+    return SequentialNode(name, config, fallback=True)
 
 
-class AsyncFallbackNode(FallbackNode):
-    asynch = True
+def AsyncFallbackNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
+    """Like Fallback, but yields (RUNNING + wake-up) after each synchronous child failure."""
+    return SequentialNode(name, config, fallback=True, asynch=True)

@@ -55,6 +55,8 @@ class SleepNode(StatefulActionNode):
 class TimeoutNode(DecoratorNode):
     """Halt the child and return FAILURE if it is still RUNNING after ``msec`` ms."""
 
+    _bare_tick_ok = True  # tick() resets a completed child itself
+
     @classmethod
     def provided_ports(cls):
         return [input_port("msec", UINT, description="After a certain amount of time, halt() the child "
@@ -106,6 +108,8 @@ class TimeoutNode(DecoratorNode):
 
 class DelayNode(DecoratorNode):
     """Wait ``delay_msec`` ms (returning RUNNING) before ticking the child."""
+
+    _bare_tick_ok = True  # tick() resets a completed child itself
 
     @classmethod
     def provided_ports(cls):
