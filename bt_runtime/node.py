@@ -15,15 +15,13 @@ from __future__ import annotations
 import asyncio
 import functools
 from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
+from .blackboard import Blackboard
 from .errors import BehaviorTreeException, BTRuntimeError, LogicError, NodeExecutionError
 from .ports import EMPTY, PortInfo, blackboard_key, ports_dict
 from .status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType
-
-if TYPE_CHECKING:
-    from .blackboard import Blackboard
-    from .timers import TimerQueue, WakeUpSignal
+from .timers import TimerQueue, WakeUpSignal
 
 StatusCallback = Callable[[float, "TreeNode", NodeStatus, NodeStatus], None]
 PreTickHook = Callable[["TreeNode"], NodeStatus | None]
@@ -45,12 +43,11 @@ class NodeConfig:
                  context: Any = None, wake_up: WakeUpSignal | None = None,
                  timers: TimerQueue | None = None, clock: Callable[[], float] | None = None):
         if blackboard is None:
-            from .blackboard import Blackboard
             blackboard = Blackboard()
-        if wake_up is None or timers is None:
-            from .timers import TimerQueue, WakeUpSignal
-            wake_up = wake_up or WakeUpSignal()
-            timers = timers or TimerQueue()
+        if wake_up is None:
+            wake_up = WakeUpSignal()
+        if timers is None:
+            timers = TimerQueue()
         self.blackboard = blackboard
         self.enums = enums if enums is not None else {}
         self.input_ports = input_ports if input_ports is not None else {}

@@ -40,6 +40,8 @@ if TYPE_CHECKING:
 
 PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")
 POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
+_CONDITION_NAMES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
+_BAD_INSTANCE_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 _INT_RE = re.compile(r"-?[0-9]+")
 _DOUBLE_RE = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 
@@ -91,15 +93,15 @@ class TreeBuilder:
     def _config(self, manifest: TreeNodeManifest, bb: Blackboard, uid: int, path: str,
                 doc: XMLDocument, elem: etree._Element) -> NodeConfig:
         cfg = NodeConfig(bb, enums=self.factory.enums, manifest=manifest, uid=uid, path=path,
-                         context=self.factory.context)
-        cfg.wake_up = self.wake_up
-        cfg.timers = self.timers
-        cfg.clock = self.clock_holder[0]
+                         context=self.factory.context, wake_up=self.wake_up, timers=self.timers,
+                         clock=self.clock_holder[0])
         cfg.source = (doc.file, doc.line_of(elem))
         return cfg
 
     def _compile_conditions(self, cfg: NodeConfig, attrs: dict[str, str], doc: XMLDocument,
                             elem: etree._Element) -> None:
+        if not any(key in _CONDITION_NAMES for key in attrs):
+            return
         for names, target in ((PRE_CONDITIONS, cfg.pre_conditions), (POST_CONDITIONS, cfg.post_conditions)):
             for attr in names:
                 code = attrs.get(attr)
@@ -114,11 +116,8 @@ class TreeBuilder:
 
     @staticmethod
     def _check_instance_name(name: str) -> str | None:
-        for ch in name:
-            o = ord(ch)
-            if (o < 32 and ch not in "\t\n\r") or o == 127:
-                return ch
-        return None
+        m = _BAD_INSTANCE_CHAR.search(name)
+        return m.group(0) if m else None
 
     # -- nodes ---------------------------------------------------------------------------------
     def _build_node(self, elem: etree._Element, doc: XMLDocument, record: SubtreeRecord, prefix: str,
