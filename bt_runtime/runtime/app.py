@@ -92,6 +92,8 @@ class AutonomyRuntime:
         self._service_tasks: list[asyncio.Task] = []
         self._started_wall = 0.0
         self._started_sim = 0.0
+        self._grid_origin = 0.0
+        self._tick_origin = 0.0
         self.running = False
 
     # -- tree ----------------------------------------------------------------------------------
@@ -132,6 +134,7 @@ class AutonomyRuntime:
             raise RuntimeError("load a tree before starting the runtime")
         self._started_wall = time.perf_counter()
         self._started_sim = self.clock()
+        self._grid_origin = self.clock()  # the driver's periodic work starts on this grid
         await self.driver.start()
         self.backup.attach()
         self.gate.attach()
@@ -139,9 +142,12 @@ class AutonomyRuntime:
         self.supervisor.register_local("tree", timeout=max(0.5, 5.0 / self.config.tick.rate_hz),
                                        restart=self._restart_tree, auto_restart=True)
         spawn = self.loop.create_task
+        period = 1.0 / self.config.tick.rate_hz
+        self._tick_origin = self._grid_origin + self.config.tick.phase * period
         self._service_tasks = [spawn(self.supervisor.run(), name="supervisor"),
                                spawn(self.backup.run(), name="backup"),
-                               spawn(self.gate.run(), name="gate")]
+                               spawn(self.gate.run(self._tick_origin + self.config.gate.phase * period),
+                                     name="gate")]
         self.gate.heartbeat()  # the first tick is due within one period: no spurious dead-man
         self._start_tick_task()
         self.running = True
@@ -150,7 +156,7 @@ class AutonomyRuntime:
 
     def _start_tick_task(self) -> None:
         assert self.tick_loop is not None
-        self._tick_task = self.loop.create_task(self.tick_loop.run(), name="tick")
+        self._tick_task = self.loop.create_task(self.tick_loop.run(self._tick_origin), name="tick")
 
     @property
     def tick_task(self) -> asyncio.Task | None:

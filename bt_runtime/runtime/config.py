@@ -12,7 +12,10 @@ class _Model(BaseModel):
 class TickConfig(_Model):
     rate_hz: float = Field(100.0, gt=0, description="tree tick rate")
     stop_on_completion: bool = Field(True, description="stop when the root returns SUCCESS/FAILURE")
-    spin_window_s: float = Field(0.0015, ge=0, description="real-time mode: yield-until-deadline window")
+    spin_window_s: float = Field(0.0035, ge=0, description="real-time mode: yield-until-deadline window "
+                                                           "(stock asyncio wakes up to ~3 ms late)")
+    phase: float = Field(0.5, ge=0, lt=1, description="tick deadlines sit this fraction of a period after "
+                                                       "the driver's start, away from its periodic work")
 
 
 class ComponentWatch(_Model):
@@ -45,6 +48,8 @@ class BackupConfig(_Model):
 
 class GateConfig(_Model):
     rate_hz: float = Field(100.0, gt=0)
+    phase: float = Field(0.1, ge=0, lt=1, description="the gate runs this fraction of a tick period after "
+                                                       "each tick, so tree commands go out at once")
     deadman_timeout: float = Field(0.1, gt=0, description="tree heartbeat older than this: zero")
     nav_stale_timeout: float = Field(0.25, gt=0, description="navigation command older than this: ignored")
     tree_stale_timeout: float = Field(0.2, gt=0, description="tree command older than this: ignored")

@@ -157,12 +157,12 @@ class DecisionGate:
             setter(linear)
 
     # -- output --------------------------------------------------------------------------------
-    async def run(self) -> None:
-        """Publish the gate's decision every period, on absolute deadlines."""
+    async def run(self, start_at: float | None = None) -> None:
+        """Publish the gate's decision every period, on absolute deadlines from ``start_at``."""
         loop = asyncio.get_running_loop()
         period = 1.0 / self.config.rate_hz
-        start = loop.time()
-        k = 0
+        start = loop.time() if start_at is None else start_at
+        k = max(0, int((loop.time() - start) // period))
         while True:
             k += 1
             await asyncio.sleep(max(0.0, start + k * period - loop.time()))

@@ -105,16 +105,20 @@ class TickLoop:
     def period(self) -> float:
         return 1.0 / self.config.rate_hz
 
-    async def run(self) -> NodeStatus:
-        """Tick until the root completes (when ``stop_on_completion``) or the task is cancelled."""
+    async def run(self, start_at: float | None = None) -> NodeStatus:
+        """Tick until the root completes (when ``stop_on_completion``) or the task is cancelled.
+
+        The first deadline is ``start_at + period`` (default: now + period); later ones follow
+        on the same grid, skipping deadlines a slow tick has already passed.
+        """
         loop = asyncio.get_running_loop()
         precise = self.realtime if self.realtime is not None else not is_virtual(loop)
         self.tree.set_clock(loop.time)
         self.done = loop.create_future()
         period = self.period
         spin = self.config.spin_window_s
-        t0 = loop.time()
-        k = 0
+        t0 = loop.time() if start_at is None else start_at
+        k = max(0, int((loop.time() - t0) // period))
         try:
             while True:
                 k += 1

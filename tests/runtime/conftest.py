@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+import structlog
 
 from bt_runtime.logging_setup import quiet_logging
 from bt_runtime.runtime.app import AutonomyRuntime
@@ -10,7 +11,12 @@ from bt_runtime.runtime.clock import VirtualTimeLoop
 from bt_runtime.runtime.config import RuntimeConfig
 from sim.driver import SimDriver
 
-quiet_logging()
+
+@pytest.fixture(autouse=True)
+def _quiet_logs():
+    quiet_logging()
+    yield
+    structlog.reset_defaults()
 
 
 def pytest_asyncio_loop_factories(config, item):
