@@ -41,6 +41,28 @@ class Entry:
         return f"Entry({self.value!r}, type={self.type.name}, seq={self.sequence_id})"
 
 
+def _accepts(declared: PortType, value: Any) -> tuple[bool, Any]:
+    """Does a typed entry reached through a SubTree remapping take this (non-string) value?
+
+    What ``_write_local`` accepts for a local entry: an exact numeric conversion (an int into
+    an ``unsigned short`` entry), an instance of a custom type's Python class, a list for a
+    list type. BT.CPP's value types are static (a node's ``setOutput<uint16_t>`` writes a
+    uint16_t), ours are inferred from the value, so without this a SubTree with a remapped
+    typed port could not write an ``int`` or a ``Path`` into its parent's entry."""
+    if not declared.strongly_typed:
+        return False, None
+    if type_of_value(value) == declared:
+        return True, value
+    ok, converted = convert_exact(value, declared)
+    if ok:
+        return True, converted
+    if declared.kind == "custom" and declared.py_type is not None and isinstance(value, declared.py_type):
+        return True, value
+    if declared.kind == "list" and isinstance(value, list):
+        return True, value
+    return False, None
+
+
 def _type_mismatch(key: str, previous: PortType, current: PortType) -> LogicError:
     return LogicError(f"Blackboard entry [{key}]: once declared, the type of a port shall not change. "
                       f"Previously declared type [{previous.name}], current type [{current.name}]")
@@ -140,6 +162,13 @@ class Blackboard:
         if entry is None:
             # Not local: create through remapping/autoremap rules (may land in a parent); an
             # existing entry found that way is type-checked strictly and written as is.
+            if self.parent is not None and not isinstance(value, str):
+                existing = self.get_entry(key)
+                if existing is not None:
+                    ok, converted = _accepts(existing.type, value)
+                    if ok:
+                        existing.write(converted)
+                        return
             new_type = ANYTYPE if isinstance(value, str) else type_of_value(value)
             self.create_entry(key, new_type).write(value)
             return
