@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import structlog
 
-from bt_runtime.errors import BTRuntimeError
+from bt_runtime.errors import BTRuntimeError, LogicError
 from bt_runtime.runtime.messages import LocalizedPose, Path, Pose2D
 
 log = structlog.get_logger("nodes.nav2")
@@ -44,7 +44,7 @@ def navigation(node: Any) -> Any:
     ctx = node.context
     nav = getattr(ctx, "navigation", None) if ctx is not None else None
     if nav is None:
-        raise BTRuntimeError(f"node '{node.config.path}' [{node.registration_name}] needs a runtime context "
+        raise LogicError(f"node '{node.config.path}' [{node.registration_name}] needs a runtime context "
                              "with a navigation client (context.navigation); create the factory with "
                              "the runtime's context")
     return nav
