@@ -475,8 +475,9 @@ class FollowPath(BtActionNode):
 
     def on_tick(self) -> None:
         self.goal = {"path": self.get_input("path", None)}
+        self._id_ports = [key for key in self._IDS if key in self.config.input_ports]  # given ones
         for key in self._IDS:
-            self.goal[key] = self.get_input(key, "") or ""
+            self.goal[key] = self.get_input(key, "") or "" if key in self._id_ports else ""
         self._ids_changed = False
 
     def send_goal(self) -> Any:
@@ -491,7 +492,7 @@ class FollowPath(BtActionNode):
         if not is_empty(new_path) and not same_path(self.goal["path"], new_path):
             self.goal["path"] = new_path
             self.goal_updated = True
-        for key in self._IDS:
+        for key in self._id_ports:
             value = self.get_input(key, "") or ""
             if value != self.goal[key]:
                 self.goal[key] = value
