@@ -21,7 +21,7 @@ from bt_runtime.runtime.clock import run
 from bt_runtime.runtime.config import GateConfig, RuntimeConfig
 from bt_runtime.runtime.messages import Pose2D
 from bt_runtime.xml.v3 import BTFormatWarning
-from nodes.nav2 import NAV2_NODES, register_nav2_nodes, start_navigation
+from nodes.nav2 import NAV2_NODES, publish_stamped, register_nav2_nodes, start_navigation
 from nodes.nav2.models import refreshed
 from sim.driver import SimDriver
 from sim.faults import RemoveObstacle
@@ -50,14 +50,31 @@ class LocalizedSimDriver(SimDriver):
         await asyncio.sleep(0.5)
 
 
+NAVIGATOR = """<root BTCPP_format="4" main_tree_to_execute="Navigator"><BehaviorTree ID="Navigator"><Sequence>
+  <Timeout msec="5000"><ForceSuccess><KeepRunningUntilFailure><Inverter>
+    <TransformAvailable child="base_link" parent="map"/></Inverter></KeepRunningUntilFailure></ForceSuccess></Timeout>
+  <SubTree ID="{tree_id}" _autoremap="true"/></Sequence></BehaviorTree></root>"""
+
+
 async def navigate(tree: Path, goal: Pose2D, *, driver: SimDriver | None = None, duration: float = 300.0,
-                   setup=None, during=None):
-    """Run ``tree`` to ``goal`` in baseline mode; returns (summary, runtime, driver, events, wall)."""
+                   setup=None, during=None, hosted: bool = False, goals: list[Pose2D] | None = None):
+    """Run ``tree`` to ``goal`` in baseline mode; returns (summary, runtime, driver, events, wall).
+
+    ``hosted``: run the file's main tree as a SubTree of a navigator that waits for the robot
+    pose first (for stock trees whose first tick needs it, e.g. DistanceController)."""
     driver = driver or LocalizedSimDriver("apartment", "burger", seed=1)
     rt = AutonomyRuntime(driver, RuntimeConfig(gate=GateConfig(passthrough=True)), register=[register_nav2_nodes])
-    rt.load_tree(tree)
+    if hosted:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", BTFormatWarning)
+            loaded = rt.factory.register_behavior_tree_from_file(tree)
+        rt.load_tree(NAVIGATOR.replace("{tree_id}", rt.factory.main_tree_id_of(loaded)))
+    else:
+        rt.load_tree(tree)
     bb = rt.tree.root_blackboard
     start_navigation(bb, goal)
+    if goals is not None:
+        bb.set("goals", goals)
     events: list[tuple] = []
 
     def observe(t, node, _prev, status):
@@ -138,6 +155,50 @@ def test_a_new_goal_while_navigating_is_taken_up_at_the_next_replan():
         summary, rt, driver, events, _ = await navigate(JAZZY_TREE, first, during=change_goal)
         assert summary.status == "SUCCESS"
         assert reached(rt, driver, second)
+    run(main(), virtual=True)
+
+
+NAVIGATION_TREES = ["navigate_w_replanning_time", "navigate_w_replanning_distance", "navigate_w_replanning_speed",
+                    "navigate_w_replanning_only_if_goal_is_updated",
+                    "navigate_w_replanning_only_if_path_becomes_invalid",
+                    "navigate_w_recovery_and_replanning_only_if_path_becomes_invalid",
+                    "nav_to_pose_with_consistent_replanning_and_if_path_becomes_invalid",
+                    "navigate_to_pose_w_replanning_goal_patience_and_recovery",
+                    "navigate_through_poses_w_replanning_and_recovery"]
+
+
+@pytest.mark.parametrize("path", [pytest.param(STOCK / "jazzy" / f"{name}.xml", id=f"jazzy/{name}")
+                                  for name in NAVIGATION_TREES]
+                         + [pytest.param(STOCK / version / "navigate_to_pose_w_replanning_and_recovery.xml",
+                                         id=f"{version}/default") for version in ("humble", "main")])
+@needs_stock
+def test_every_stock_navigation_tree_reaches_the_goal(path):
+    async def main():
+        goal = Pose2D(1.0, -2.5)
+        goals = [Pose2D(-0.5, -3.0), Pose2D(0.5, -2.0), goal] if "through_poses" in path.name else None
+        summary, rt, driver, events, _ = await navigate(path, goal, hosted=True, goals=goals)
+        assert summary.status == "SUCCESS" and summary.tick_errors == 0
+        assert reached(rt, driver, goal)
+        if goals is not None:  # RemovePassedGoals dropped the via-points on the way
+            assert rt.tree.root_blackboard.get("goals") == [goal]
+    run(main(), virtual=True)
+
+
+@needs_stock
+def test_follow_point_keeps_one_metre_behind_a_moving_goal():
+    async def main():
+        first, moved = Pose2D(1.0, -2.0), Pose2D(1.0, -4.0)
+
+        async def move_goal(rt, _driver):
+            await asyncio.sleep(15.0)
+            assert 0.8 <= _driver.sim.pose.distance_to(first) <= 1.3  # TruncatePath distance="1.0"
+            publish_stamped(rt.context, "goal_update", moved)  # GoalUpdater takes the newer goal
+
+        summary, rt, driver, _, _ = await navigate(STOCK / "jazzy" / "follow_point.xml", first, hosted=True,
+                                                   during=move_goal, duration=35.0)
+        assert summary.status == "RUNNING"  # follows until it fails, like Nav2's
+        assert rt.tree.root_blackboard.get("updated_goal") == moved
+        assert 0.6 <= driver.sim.pose.distance_to(moved) <= 1.3
     run(main(), virtual=True)
 
 
