@@ -199,7 +199,8 @@ def test_service_wire_is_header_then_body(store, body):
     assert wire_cls.__idl_typename__ == body.__idl_typename__
     rng = random.Random(body.__name__)
     obj = fill(body, rng)
-    wire = wire_cls(guid=0x0123456789ABCDEF, seq=-5, body=obj)
+    wire = idl.wrap(0x0123456789ABCDEF, -5, obj)
+    assert type(wire) is wire_cls and idl.unwrap(wire) == obj
     name = ros_name(body)
     ros = bytes(store.serialize_cdr(to_rosbags(store, obj, name), name))
     expected = ros[:4] + struct.pack("<Qq", 0x0123456789ABCDEF, -5) + ros[4:]

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from cyclonedds.idl import IdlMeta, IdlStruct
+from cyclonedds.idl._type_normalize import get_extended_type_hints
 from cyclonedds.idl.types import (
     array,
     float32,
@@ -45,7 +46,7 @@ __all__ = [
     "LaserScan", "NavigateToPose", "Odometry", "Path", "Point", "Pose", "PoseStamped",
     "PoseWithCovariance", "PoseWithCovarianceStamped", "Quaternion", "Spin", "State", "Time",
     "Transition", "Twist", "TwistStamped", "TwistWithCovariance", "UUID", "Vector3",
-    "Vector3Stamped", "Wait", "service_wire",
+    "Vector3Stamped", "Wait", "service_wire", "unwrap", "wrap",
 ]
 
 
@@ -441,11 +442,32 @@ _WIRE_CACHE: dict[type, type] = {}
 def service_wire(body: type) -> type:
     """The type rmw_cyclonedds puts on an ``rq/...Request`` or ``rr/...Reply`` topic: the
     request header (``guid``: the client's request-writer instance handle, ``seq``) followed by
-    the request or response fields. Same DDS type name as the body."""
+    the request or response fields, flattened (the same bytes as nesting the body in CDR, and
+    the type may not contain a member of its own DDS type name). ``wrap``/``unwrap`` convert."""
     wire = _WIRE_CACHE.get(body)
     if wire is None:
-        typename = body.__idl_typename__
-        wire = _struct(f"{body.__name__}_Wire", typename, [
-            ("guid", uint64, 0), ("seq", int64, 0), ("body", body, _of(body))])
+        from dataclasses import MISSING, fields
+
+        members = [("guid", uint64, 0), ("seq", int64, 0)]
+        hints = get_extended_type_hints(body)
+        for f in fields(body):
+            default = (field(default_factory=f.default_factory) if f.default_factory is not MISSING
+                       else f.default)
+            members.append((f.name, hints[f.name], default))
+        wire = _struct(f"{body.__name__}_Wire", body.__idl_typename__, members)
+        wire.body_type = body
+        wire.body_fields = tuple(f.name for f in fields(body))
         _WIRE_CACHE[body] = wire
     return wire
+
+
+def wrap(guid: int, seq: int, body: Any) -> Any:
+    """The wire sample for a request/reply body."""
+    wire = service_wire(type(body))
+    return wire(guid=guid, seq=seq, **{name: getattr(body, name) for name in wire.body_fields})
+
+
+def unwrap(sample: Any) -> Any:
+    """The request/reply body of a wire sample."""
+    wire = type(sample)
+    return wire.body_type(**{name: getattr(sample, name) for name in wire.body_fields})
