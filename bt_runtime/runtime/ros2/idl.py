@@ -43,7 +43,7 @@ __all__ = [
     "ActionTypes", "BackUp", "BatteryState", "Bool", "ChangeState_Request", "ChangeState_Response",
     "ComputePathToPose", "DriveOnHeading", "Duration", "Empty", "FollowPath", "GetState_Request",
     "GetState_Response", "GoalInfo", "GoalStatus", "GoalStatusArray", "Header", "Imu",
-    "LaserScan", "NavigateToPose", "Odometry", "Path", "Point", "Pose", "PoseStamped",
+    "LaserScan", "MapMetaData", "NavigateToPose", "OccupancyGrid", "String", "Odometry", "Path", "Point", "Pose", "PoseStamped",
     "PoseWithCovariance", "PoseWithCovarianceStamped", "Quaternion", "Spin", "State", "Time",
     "Transition", "Twist", "TwistStamped", "TwistWithCovariance", "UUID", "Vector3",
     "Vector3Stamped", "Wait", "service_wire", "unwrap", "wrap",
@@ -250,6 +250,27 @@ class Odometry(IdlStruct, typename="nav_msgs::msg::dds_::Odometry_"):
 class Path(IdlStruct, typename="nav_msgs::msg::dds_::Path_"):
     header: Header = _of(Header)
     poses: sequence[PoseStamped] = _list()
+
+
+@dataclass
+class MapMetaData(IdlStruct, typename="nav_msgs::msg::dds_::MapMetaData_"):
+    map_load_time: Time = _of(Time)
+    resolution: float32 = 0.0
+    width: uint32 = 0
+    height: uint32 = 0
+    origin: Pose = _of(Pose)
+
+
+@dataclass
+class OccupancyGrid(IdlStruct, typename="nav_msgs::msg::dds_::OccupancyGrid_"):
+    header: Header = _of(Header)
+    info: MapMetaData = _of(MapMetaData)
+    data: sequence[int8] = _list()
+
+
+@dataclass
+class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
+    data: str = ""
 
 
 # --------------------------------------------------------------------------------------------
