@@ -17,6 +17,7 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``navigate_to_pose``, ``compute_path_to_pose``, ``follow_path``, ``spin``, ``backup``, ``drive_on_heading``, ``wait`` | nav2_msgs actions | NavStack |
 | ``/global_costmap/clear_entirely_global_costmap``, ``/local_costmap/...`` | nav2_msgs/srv/ClearEntireCostmap | NavStack |
 | ``<component>/get_state``, ``<component>/change_state`` | lifecycle_msgs services | ``Simulator.crash``/``restart`` |
+| ``sim/ground_truth`` | geometry_msgs/PoseStamped, 10 Hz: the true pose, for judging only | simulator |
 | ``sim/fault`` (in) | std_msgs/String, a JSON fault (``{"kind": "crash", "component": "lidar"}``) | ``sim.faults`` |
 
 A DDS peer cannot share a virtual clock, so this runs on the wall clock. Header stamps are
@@ -121,10 +122,12 @@ class SimRobot:
             "bumper": pub("bumper", idl.Bool),
             "bumper_contact": pub("bumper_contact", idl.Vector3Stamped),
             "nav_cmd_vel": pub("cmd_vel_nav", idl.Twist),
+            "ground_truth": pub("sim/ground_truth", idl.PoseStamped),
         }
         self.writers = writers
         convert = {"scan": self._scan, "imu": self._imu, "odom": self._odom, "pose": self._pose,
-                   "battery": self._battery, "nav_cmd_vel": self._twist}
+                   "battery": self._battery, "nav_cmd_vel": self._twist,
+                   "ground_truth": lambda m: _stamped(m.pose)}
         for stream, fn in convert.items():
             self._unsub.append(sim.subscribe(stream, self._forward(stream, writers[stream], fn)))
         self._unsub.append(sim.subscribe("bumper", self._bumper))

@@ -86,13 +86,15 @@ ACTION_STATUS = QosProfile(reliable=True, transient_local=True, depth=1)  # rcl_
 LATCHED = QosProfile(reliable=True, transient_local=True, depth=1)
 
 
-def loopback_config(domain_id: int | None = None) -> str:
-    """A Cyclone DDS configuration that keeps all traffic on 127.0.0.1 (unicast discovery)."""
+def loopback_config(domain_id: int | None = None, lease_duration: float = 2.0) -> str:
+    """A Cyclone DDS configuration that keeps all traffic on 127.0.0.1 (unicast discovery).
+    ``lease_duration``: how soon peers notice that this process died (Cyclone's default 10 s)."""
     dom = "any" if domain_id is None else str(domain_id)
     return ("<CycloneDDS><Domain id=\"" + dom + "\"><General><Interfaces>"
             "<NetworkInterface address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast>"
             "</General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
             "<MaxAutoParticipantIndex>40</MaxAutoParticipantIndex>"
+            f"<LeaseDuration>{lease_duration:g} s</LeaseDuration>"
             "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>")
 
 
