@@ -17,6 +17,7 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``navigate_to_pose``, ``compute_path_to_pose``, ``follow_path``, ``spin``, ``backup``, ``drive_on_heading``, ``wait`` | nav2_msgs actions | NavStack |
 | ``/global_costmap/clear_entirely_global_costmap``, ``/local_costmap/...`` | nav2_msgs/srv/ClearEntireCostmap | NavStack |
 | ``<component>/get_state``, ``<component>/change_state`` | lifecycle_msgs services | ``Simulator.crash``/``restart`` |
+| ``speed_limit`` (in) | nav2_msgs/SpeedLimit | ``NavStack.set_speed_limit`` |
 | ``sim/ground_truth`` | geometry_msgs/PoseStamped, 10 Hz: the true pose, for judging only | simulator |
 | ``sim/fault`` (in) | std_msgs/String, a JSON fault (``{"kind": "crash", "component": "lidar"}``) | ``sim.faults`` |
 
@@ -135,6 +136,7 @@ class SimRobot:
         cmd_type = idl.TwistStamped if self.stamped_cmd_vel else idl.Twist
         node.subscription("cmd_vel", cmd_type, dds.QosProfile(reliable=False, depth=10), self._on_cmd_vel)
         node.subscription("sim/fault", idl.String, dds.DEFAULT, self._on_fault)
+        node.subscription("speed_limit", idl.SpeedLimit, dds.DEFAULT, self._on_speed_limit)
 
         nav = driver.navigation
         A = dds.ActionServer
@@ -244,6 +246,11 @@ class SimRobot:
         self.commands += len(samples)
         if len(self.cmd_receive_times) < 100000:
             self.cmd_receive_times.append((now, twist.linear.x))
+
+    def _on_speed_limit(self, samples: list, _now: float) -> None:
+        m = samples[-1]
+        limit = m.speed_limit if math.isfinite(m.speed_limit) and m.speed_limit > 0 else None
+        self.driver.navigation.set_speed_limit(limit, percentage=bool(m.percentage))
 
     def _on_fault(self, samples: list, _now: float) -> None:
         for m in samples:

@@ -60,6 +60,7 @@ SERVICE_DEFS = {
     "action_msgs/srv/CancelGoal_Response": "int8 ERROR_NONE=0\nint8 return_code\naction_msgs/GoalInfo[] goals_canceling",
     "nav2_msgs/srv/ClearEntireCostmap_Request": "std_msgs/Empty request",
     "nav2_msgs/srv/ClearEntireCostmap_Response": "std_msgs/Empty response",
+    "nav2_msgs/msg/SpeedLimit": "std_msgs/Header header\nbool percentage\nfloat64 speed_limit",
 }
 
 

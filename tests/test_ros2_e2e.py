@@ -6,6 +6,7 @@
   lifecycle services, health returns to OK and the goal is reached within 0.25 m, judged from
   the recorded supervisor events and the simulator's ground truth.
 * A robot process that is killed: every component FAILED, a running goal ends ABORTED.
+* The navigation API over Nav2's actions, services and topics.
 * Malformed and absurd messages are dropped and counted, never delivered, never fatal.
 """
 
@@ -282,3 +283,53 @@ async def test_malformed_and_absurd_messages_are_dropped_and_counted(domain):
     scan = got["scan"][0]
     assert len(scan.ranges) == 6 and math.isnan(scan.ranges[4]) and math.isinf(scan.ranges[2])
     assert got["battery"][0].percentage == pytest.approx(50.0)
+
+
+async def test_navigation_api_over_nav2_interfaces(domain):
+    """Every NavigationClient call goes through Nav2's actions/services/topics to sim-robot."""
+    config = Ros2Config(domain_id=domain, lifecycle={"transition_timeout": 0.5},
+                        components={"lidar": {"streams": ["scan"], "rate_hz": 5, "lifecycle_node": "lidar"},
+                                    "wheels": {"kind": "base", "streams": ["odom"], "rate_hz": 50},
+                                    "ghost": {"streams": ["imu"], "rate_hz": 50, "lifecycle_node": "no_such_node"}})
+    async with sim_robot(domain, "--robot", "burger"):
+        driver = Ros2Driver(config)
+        nav_cmds: list[float] = []
+        driver.subscribe("nav_cmd_vel", lambda t: nav_cmds.append(t.linear))
+        driver.subscribe("nav_cmd_vel", lambda t: driver.send_velocity(t.linear, t.angular))  # no gate here
+        await driver.start()
+        nav = driver.navigation
+        try:
+            await wait_for(lambda: "pose" in driver.latest, 10, "a pose")
+            plan = await nav.compute_path_to_pose(Pose2D(SPAWN.x + 1.0, SPAWN.y))
+            assert plan.succeeded and len(plan.path) >= 2
+            assert plan.path.points[-1][0] == pytest.approx(SPAWN.x + 1.0, abs=0.06)
+            occupied = await nav.compute_path_to_pose(Pose2D(100.0, 100.0))
+            assert occupied.status.value == "aborted" and occupied.error_code.value in (204, 208)
+            nav.set_speed_limit(0.1)  # Nav2's SpeedLimit topic -> the controller
+            await asyncio.sleep(0.3)
+            feedback = []
+            result = await asyncio.wait_for(nav.navigate_to_pose(Pose2D(SPAWN.x + 0.6, SPAWN.y),
+                                                                 feedback=feedback.append), 20)
+            assert result.succeeded, result
+            assert feedback and feedback[-1].distance_remaining < 0.6
+            assert 0.05 < max(nav_cmds) <= 0.1 + 1e-6  # Nav2 itself held the limit
+            nav.set_speed_limit(None)
+            assert (await asyncio.wait_for(nav.wait(0.3), 5)).succeeded
+            assert (await asyncio.wait_for(nav.spin(0.5), 15)).succeeded
+            backup = await asyncio.wait_for(nav.back_up(0.1, 0.05), 15)
+            assert backup.succeeded, backup
+            handle = nav.navigate_to_pose(Pose2D(SPAWN.x + 2.0, SPAWN.y))
+            await wait_for(lambda: handle.feedback is not None, 10, "feedback")
+            handle.cancel()
+            assert (await asyncio.wait_for(handle, 5)).status.value == "canceled"
+            await nav.clear_costmaps("both")
+            assert nav.is_path_valid(plan.path)  # no costmap topic from sim-robot: cannot judge
+            with pytest.raises(NotImplementedError, match="Nav2 has no service"):
+                await nav.add_obstacle(0.0, 0.0)
+            assert await driver.restart("wheels") is False  # no lifecycle node: not restartable
+            assert await driver.restart("ghost") is False  # lifecycle service does not answer
+            assert await driver.get_lifecycle_state("lidar") == idl.State.PRIMARY_STATE_ACTIVE
+        finally:
+            await driver.stop()
+    infos = {c.name: c for c in driver.components()}
+    assert not infos["wheels"].restartable and infos["lidar"].restartable

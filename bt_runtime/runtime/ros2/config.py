@@ -74,6 +74,8 @@ class Navigation(_Model):
     clear_local_costmap: str = "/local_costmap/clear_entirely_local_costmap"
     global_costmap: str | None = Field("/global_costmap/costmap", description="nav_msgs/OccupancyGrid "
                                        "used for is_path_valid / path_clearance (None: not used)")
+    speed_limit: str | None = Field("speed_limit", description="nav2_msgs/SpeedLimit topic of the "
+                                    "controller server (the gate's speed limit is passed on); None = off")
     map_frame: str = "map"
     server_timeout: float = Field(5.0, gt=0, description="wait this long for an action server")
     service_timeout: float = Field(2.0, gt=0)

@@ -326,6 +326,7 @@ class Ros2Navigation:
         self._clear: dict[str, dds.ServiceClient] = {}
         self._costmap: tuple[np.ndarray, float, float, float] | None = None
         self._lethal_distance: np.ndarray | None = None
+        self._speed_limit_writer: Any = None
 
     def attach(self, node: dds.DdsNode) -> None:
         self.node = node
@@ -345,6 +346,8 @@ class Ros2Navigation:
                                         idl.ClearEntireCostmap_Response),
             "local": dds.ServiceClient(node, cfg.clear_local_costmap, idl.ClearEntireCostmap_Request,
                                        idl.ClearEntireCostmap_Response)}
+        if cfg.speed_limit:
+            self._speed_limit_writer = node.publisher(cfg.speed_limit, idl.SpeedLimit, dds.DEFAULT)
         if cfg.global_costmap:
             node.subscription(cfg.global_costmap, idl.OccupancyGrid, dds.QosProfile(True, True, 1), self._on_costmap)
 
@@ -436,6 +439,14 @@ class Ros2Navigation:
     def cancel_all(self) -> None:
         for handle in list(self.handles):
             handle.cancel()
+
+    def set_speed_limit(self, limit: float | None, percentage: bool = False) -> None:
+        """Nav2's SpeedLimit (m/s, or percent of the maximum); None or <= 0 lifts it."""
+        writer = self._speed_limit_writer
+        if writer is None or self.node is None or self.node.closed:
+            return
+        value = 0.0 if limit is None or not math.isfinite(limit) or limit <= 0 else float(limit)
+        writer.write(idl.SpeedLimit(header=idl.Header(frame_id=""), percentage=percentage, speed_limit=value))
 
     async def clear_costmaps(self, which: str = "both") -> None:
         if which not in ("local", "global", "both"):
@@ -559,7 +570,12 @@ class Ros2Driver:
     def from_args(cls, args: Any) -> Ros2Driver:
         """For ``python -m bt_runtime run --driver ros2 [--ros2-config FILE]``."""
         path = getattr(args, "ros2_config", None)
-        config = Ros2Config.load(path) if path else Ros2Config()
+        try:
+            config = Ros2Config.load(path) if path else Ros2Config()
+        except ValueError as exc:  # reported by the CLI as a usage error, without a traceback
+            from ...cli.run import UsageError
+
+            raise UsageError(str(exc)) from None
         if "domain_id" not in config.model_fields_set and os.environ.get("ROS_DOMAIN_ID", "").isdigit():
             config.domain_id = int(os.environ["ROS_DOMAIN_ID"])
         return cls(config)

@@ -44,7 +44,7 @@ __all__ = [
     "ComputePathToPose", "DriveOnHeading", "Duration", "Empty", "FollowPath", "GetState_Request",
     "GetState_Response", "GoalInfo", "GoalStatus", "GoalStatusArray", "Header", "Imu",
     "LaserScan", "MapMetaData", "NavigateToPose", "OccupancyGrid", "String", "Odometry", "Path", "Point", "Pose", "PoseStamped",
-    "PoseWithCovariance", "PoseWithCovarianceStamped", "Quaternion", "Spin", "State", "Time",
+    "PoseWithCovariance", "PoseWithCovarianceStamped", "Quaternion", "Spin", "SpeedLimit", "State", "Time",
     "Transition", "Twist", "TwistStamped", "TwistWithCovariance", "UUID", "Vector3",
     "Vector3Stamped", "Wait", "service_wire", "unwrap", "wrap",
 ]
@@ -373,6 +373,13 @@ class ClearEntireCostmap_Request(IdlStruct, typename="nav2_msgs::srv::dds_::Clea
 @dataclass
 class ClearEntireCostmap_Response(IdlStruct, typename="nav2_msgs::srv::dds_::ClearEntireCostmap_Response_"):  # noqa: N801
     response: Empty = _of(Empty)
+
+
+@dataclass
+class SpeedLimit(IdlStruct, typename="nav2_msgs::msg::dds_::SpeedLimit_"):
+    header: Header = _of(Header)
+    percentage: bool = False
+    speed_limit: float64 = 0.0  # 0 = no limit
 
 
 def _struct(name: str, typename: str, fields: list[tuple[str, Any, Any]]) -> type:
