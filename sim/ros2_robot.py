@@ -22,7 +22,7 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``sim/fault`` (in) | std_msgs/String, a JSON fault (``{"kind": "crash", "component": "lidar"}``) | ``sim.faults`` |
 
 A DDS peer cannot share a virtual clock, so this runs on the wall clock. Header stamps are
-ROS time (``time.time()``).
+ROS time (the system clock, ``idl.Time.now()``).
 """
 
 from __future__ import annotations
@@ -31,7 +31,6 @@ import asyncio
 import contextlib
 import json
 import math
-import time
 from typing import Any
 
 import structlog
@@ -65,7 +64,7 @@ def parse_crash(text: str) -> tuple[str, float]:
 
 
 def _header(frame: str) -> idl.Header:
-    return idl.Header(stamp=idl.Time.from_sec(time.time()), frame_id=frame)
+    return idl.Header(stamp=idl.Time.now(), frame_id=frame)
 
 
 def _stamped(pose: Pose2D, frame: str = "map") -> idl.PoseStamped:
@@ -273,11 +272,11 @@ class SimRobot:
     async def _navigate(self, goal: Any, ctx: dds.GoalContext) -> tuple[int, Any]:
         nav = self.driver.navigation
         target = pose2d_of(goal.pose.pose)
-        started = time.monotonic()
+        started = asyncio.get_running_loop().time()
 
         def feedback(fb: Any) -> None:
             ctx.publish_feedback(idl.NavigateToPose.Feedback(
-                current_pose=_stamped(fb.current_pose), navigation_time=idl.Duration.from_sec(time.monotonic() - started),
+                current_pose=_stamped(fb.current_pose), navigation_time=idl.Duration.from_sec(asyncio.get_running_loop().time() - started),
                 number_of_recoveries=fb.number_of_recoveries,
                 distance_remaining=fb.distance_remaining if math.isfinite(fb.distance_remaining) else 0.0))
 
@@ -286,12 +285,12 @@ class SimRobot:
                                                                 error_msg=result.error_msg)
 
     async def _compute_path(self, goal: Any, ctx: dds.GoalContext) -> tuple[int, Any]:
-        started = time.monotonic()
+        started = asyncio.get_running_loop().time()
         result = await self.driver.navigation.compute_path_to_pose(
             pose2d_of(goal.goal.pose), start=pose2d_of(goal.start.pose), planner_id=goal.planner_id,
             use_start=goal.use_start)
         return STATUS[result.status], idl.ComputePathToPose.Result(
-            path=_path_msg(result.path), planning_time=idl.Duration.from_sec(time.monotonic() - started),
+            path=_path_msg(result.path), planning_time=idl.Duration.from_sec(asyncio.get_running_loop().time() - started),
             error_code=int(result.error_code), error_msg=result.error_msg)
 
     async def _follow_path(self, goal: Any, ctx: dds.GoalContext) -> tuple[int, Any]:
@@ -318,7 +317,7 @@ class SimRobot:
 
         async def execute(goal: Any, ctx: dds.GoalContext) -> tuple[int, Any]:
             nav = self.driver.navigation
-            started = time.monotonic()
+            started = asyncio.get_running_loop().time()
             if kind == "spin":
                 handle = nav.spin(goal.target_yaw, time_allowance=goal.time_allowance.to_sec() or 10.0)
             elif kind == "backup":
@@ -331,7 +330,7 @@ class SimRobot:
             result = await self._run_handle(handle)
             code = int(result.error_code)
             return STATUS[result.status], types.Result(
-                total_elapsed_time=idl.Duration.from_sec(time.monotonic() - started),
+                total_elapsed_time=idl.Duration.from_sec(asyncio.get_running_loop().time() - started),
                 error_code=codes.get(code, code), error_msg=result.error_msg)
 
         return execute

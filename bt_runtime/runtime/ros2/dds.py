@@ -499,8 +499,7 @@ class ActionServer:
         self.status_writer = node.writer("rt" + n["status"], idl.GoalStatusArray, ACTION_STATUS)
 
     def _now(self) -> idl.Time:
-        import time
-        return idl.Time.from_sec(time.time())
+        return idl.Time.now()
 
     def _on_send_goal(self, request: Any) -> Any:
         goal_id = bytes(request.goal_id.uuid)

@@ -685,9 +685,7 @@ class Ros2Driver:
         twist = idl.Twist(linear=idl.Vector3(float(linear), 0.0, 0.0), angular=idl.Vector3(0.0, 0.0, float(angular)))
         try:
             if self._cmd_type is idl.TwistStamped:
-                import time
-
-                writer.write(idl.TwistStamped(header=idl.Header(stamp=idl.Time.from_sec(time.time()),
+                writer.write(idl.TwistStamped(header=idl.Header(stamp=idl.Time.now(),
                                                                 frame_id=self.config.topics.cmd_vel.frame_id),
                                               twist=twist))
             else:

@@ -72,6 +72,13 @@ class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
     nanosec: uint32 = 0
 
     @classmethod
+    def now(cls) -> "Time":
+        """ROS time: the system (wall) clock, as ROS 2 stamps headers."""
+        import time
+
+        return cls.from_sec(time.time())
+
+    @classmethod
     def from_sec(cls, t: float) -> "Time":
         sec = int(t // 1)
         return cls(sec, min(int(round((t - sec) * 1e9)), 999_999_999))
