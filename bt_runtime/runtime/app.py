@@ -82,6 +82,9 @@ class AutonomyRuntime:
         self.supervisor = SystemSupervisor(driver, cfg.supervisor, clock=clock, gate=self.gate)
         self.backup.supervisor = self.supervisor
         self.context = RuntimeContext(driver, self.supervisor, self.backup, self.gate, cfg, clock)
+        robot_info = getattr(driver, "robot_info", None)
+        if callable(robot_info):
+            self.context.robot = robot_info()
         self.factory = BehaviorTreeFactory(context=self.context)
         for registration in register:
             registration(self.factory)
@@ -127,9 +130,13 @@ class AutonomyRuntime:
     def _on_tick(self, status: NodeStatus) -> None:
         if (status is SUCCESS or status is FAILURE) and not self.completed.done():
             self.completed.set_result(status)
+            if self.config.tick.stop_on_completion and "tree" in self.supervisor.components:
+                self.supervisor.set_watched("tree", False)  # an idle tree is not a dead tree
 
     # -- lifecycle -----------------------------------------------------------------------------
-    async def start(self) -> None:
+    async def start(self, *, tick: bool = True) -> None:
+        """Start the driver and the services; start ticking unless ``tick`` is False (then the
+        tree waits for ``restart_tree()``, as Nav2's navigator waits for a goal)."""
         if self.tree is None:
             raise RuntimeError("load a tree before starting the runtime")
         self._started_wall = time.perf_counter()
@@ -148,9 +155,12 @@ class AutonomyRuntime:
                                spawn(self.backup.run(), name="backup"),
                                spawn(self.gate.run(self._tick_origin + self.config.gate.phase * period),
                                      name="gate")]
-        self.gate.heartbeat()  # the first tick is due within one period: no spurious dead-man
-        self._start_tick_task()
         self.running = True
+        if tick:
+            self.gate.heartbeat()  # the first tick is due within one period: no spurious dead-man
+            self._start_tick_task()
+        else:
+            self.supervisor.set_watched("tree", False)
         log.info("runtime_started", driver=getattr(self.driver, "name", "?"), realtime=self.realtime,
                  sim_time=round(self.clock(), 3))
 
@@ -161,6 +171,20 @@ class AutonomyRuntime:
     @property
     def tick_task(self) -> asyncio.Task | None:
         return self._tick_task
+
+    def restart_tree(self) -> asyncio.Future:
+        """Run the tree again from its root (e.g. for a new goal); returns the future that
+        completes with the root's final status."""
+        task = self._tick_task
+        if task is not None and not task.done():
+            task.cancel()
+        if self.tree is not None:
+            self.tree.halt_tree()
+        self.completed = self.loop.create_future()
+        self.supervisor.set_watched("tree", True)
+        self.gate.heartbeat()
+        self._start_tick_task()
+        return self.completed
 
     async def _restart_tree(self) -> bool:
         """The supervisor's restart of the 'tree' component: halt it, start a new tick task."""

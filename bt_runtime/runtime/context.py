@@ -10,6 +10,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from .messages import RobotInfo
+
 if TYPE_CHECKING:
     from .backup import DataBackup
     from .config import RuntimeConfig
@@ -26,6 +28,7 @@ class RuntimeContext:
     gate: DecisionGate
     config: RuntimeConfig
     clock: Callable[[], float]
+    robot: RobotInfo = field(default_factory=RobotInfo)
     extras: dict[str, Any] = field(default_factory=dict)  # scenario or application specific
 
     @property

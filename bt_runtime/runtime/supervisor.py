@@ -54,7 +54,7 @@ class ComponentRecord:
 
     __slots__ = ("name", "kind", "streams", "timeout", "critical", "auto_restart", "restartable",
                  "state", "last_seen", "failed_restarts", "restarts", "failures", "restart_fn",
-                 "restart_task", "state_since")
+                 "restart_task", "state_since", "watched", "depends_on")
 
     def __init__(self, name: str, kind: str, streams: tuple[str, ...], timeout: float, critical: bool,
                  auto_restart: bool, restartable: bool,
@@ -74,6 +74,8 @@ class ComponentRecord:
         self.restart_fn = restart_fn
         self.restart_task: asyncio.Task | None = None
         self.state_since = 0.0
+        self.watched = True  # False while it is legitimately silent (e.g. an idle tree)
+        self.depends_on: tuple[str, ...] = ()  # components it cannot work without
 
 
 class SystemSupervisor:
@@ -113,6 +115,7 @@ class SystemSupervisor:
             auto_restart=(watch.auto_restart if watch and watch.auto_restart is not None else cfg.auto_restart),
             restartable=info.restartable)
         record.state_since = self.clock()
+        record.depends_on = tuple(info.extra.get("depends_on", ()))
         self.components[info.name] = record
         for stream in info.streams:
             self._unsubscribe.append(self.driver.subscribe(stream, self._seen_callback(record)))
@@ -147,6 +150,13 @@ class SystemSupervisor:
         if record.state is Health.UNKNOWN or record.state is Health.FAILED:
             self._set_state(record, Health.OK, "heartbeat")
 
+    def set_watched(self, name: str, watched: bool) -> None:
+        """Stop (or resume) expecting messages from ``name``; resuming restarts its clock."""
+        record = self.components[name]
+        record.watched = watched
+        if watched:
+            record.last_seen = self.clock()
+
     def add_listener(self, callback: Callable[[SupervisorEvent], Any]) -> None:
         self._listeners.append(callback)
 
@@ -170,6 +180,8 @@ class SystemSupervisor:
     def check(self, now: float | None = None) -> None:
         now = self.clock() if now is None else now
         for record in self.components.values():
+            if not record.watched:
+                continue
             state = record.state
             if state is Health.OK:
                 if record.last_seen is not None and now - record.last_seen > record.timeout:
@@ -180,8 +192,11 @@ class SystemSupervisor:
 
     def _fail(self, record: ComponentRecord, reason: str) -> None:
         record.failures += 1
+        blocked = self.failed_dependencies(record.name)
+        if blocked:
+            reason += f" (needs {', '.join(blocked)})"
         self._set_state(record, Health.FAILED, reason)
-        if record.auto_restart and record.restartable:
+        if record.auto_restart and record.restartable and not blocked:
             self.request_restart(record.name)
 
     def _set_state(self, record: ComponentRecord, state: Health, reason: str) -> None:
@@ -206,7 +221,7 @@ class SystemSupervisor:
         record = self.components.get(name)
         if record is None:
             return Health.UNKNOWN
-        if record.state is Health.OK and record.last_seen is not None:
+        if record.state is Health.OK and record.last_seen is not None and record.watched:
             if self.clock() - record.last_seen > record.timeout:
                 return Health.FAILED
         return record.state
@@ -216,6 +231,27 @@ class SystemSupervisor:
 
     def all_healthy(self, names: list[str] | None = None) -> bool:
         return all(self.health(n) is Health.OK for n in (names or self.components))
+
+    def is_failed(self, name: str) -> bool:
+        """FAILED, RESTARTING or DEAD: not merely unknown (start-up grace)."""
+        return self.health(name) in (Health.FAILED, Health.RESTARTING, Health.DEAD)
+
+    def failed_dependencies(self, name: str) -> list[str]:
+        """The components ``name`` depends on that are not OK, or recovered less than
+        ``dependency_grace`` s ago (the dependent usually comes back by itself then)."""
+        record = self.components.get(name)
+        if record is None:
+            return []
+        now = self.clock()
+        grace = self.config.dependency_grace
+        blocking = []
+        for dep in record.depends_on:
+            dep_record = self.components.get(dep)
+            if dep_record is None:
+                continue
+            if self.health(dep) is not Health.OK or now - dep_record.state_since < grace:
+                blocking.append(dep)
+        return blocking
 
     def unhealthy(self) -> list[str]:
         return [n for n in self.components if self.health(n) is not Health.OK]
@@ -249,6 +285,10 @@ class SystemSupervisor:
         record = self.components.get(name)
         if record is None or not record.restartable or record.state is Health.DEAD:
             return None
+        blocked = self.failed_dependencies(name)
+        if blocked:  # restarting it cannot help while what it needs is down: restart that
+            tasks = [self.request_restart(d) for d in blocked if self.health(d) is Health.FAILED]
+            return next((t for t in tasks if t is not None), None)
         if record.restart_task is not None and not record.restart_task.done():
             return record.restart_task
         record.restart_task = asyncio.get_running_loop().create_task(self.restart(name),
@@ -281,6 +321,9 @@ class SystemSupervisor:
             record.failed_restarts = 0
             self._set_state(record, Health.OK, "restarted, data flowing")
             return True
+        if self.failed_dependencies(name):  # not its fault: what it needs is down
+            self._set_state(record, Health.FAILED, f"restart waited for {', '.join(self.failed_dependencies(name))}")
+            return False
         record.failed_restarts += 1
         if record.failed_restarts >= cfg.max_failed_restarts:
             self._set_state(record, Health.DEAD, f"{record.failed_restarts} failed restarts")
