@@ -16,10 +16,10 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``cmd_vel_nav`` | geometry_msgs/Twist | the stand-in's controller (Nav2 remapped) |
 | ``navigate_to_pose``, ``compute_path_to_pose``, ``follow_path``, ``spin``, ``backup``, ``drive_on_heading``, ``wait`` | nav2_msgs actions | NavStack |
 | ``/global_costmap/clear_entirely_global_costmap``, ``/local_costmap/...`` | nav2_msgs/srv/ClearEntireCostmap | NavStack |
-| ``<component>/get_state``, ``<component>/change_state`` | lifecycle_msgs services | ``Simulator.crash``/``restart`` |
+| ``<component>/get_state``, ``<component>/change_state`` (sensors and planner_server, controller_server, behavior_server) | lifecycle_msgs services | ``Simulator.crash``/``restart``, ``NavStack.crash``/``restart`` |
 | ``speed_limit`` (in) | nav2_msgs/SpeedLimit | ``NavStack.set_speed_limit`` |
 | ``sim/ground_truth`` | geometry_msgs/PoseStamped, 10 Hz: the true pose, for judging only | simulator |
-| ``sim/fault`` (in) | std_msgs/String, a JSON fault (``{"kind": "crash", "component": "lidar"}``) | ``sim.faults`` |
+| ``sim/fault`` (in) | std_msgs/String, a JSON fault (``{"kind": "crash", "component": "lidar"}``; ``nav_crash``/``nav_hang``/``nav_fail_until_restart`` with a nav server ``component``) | ``sim.faults``, ``NavStack`` |
 
 A DDS peer cannot share a virtual clock, so this runs on the wall clock. Header stamps are
 ROS time (the system clock, ``idl.Time.now()``).
@@ -83,6 +83,7 @@ class SimRobot:
     """A simulated robot serving ROS 2 topics, services and actions over DDS."""
 
     LIFECYCLE = ("lidar", "imu", "odom", "bumper", "battery", "localization")
+    NAV_LIFECYCLE = ("planner_server", "controller_server", "behavior_server")
 
     def __init__(self, world: str = "apartment", robot: str = "burger", seed: int = 0, domain_id: int = 0, *,
                  namespace: str = "", crashes: list[tuple[str, float]] | tuple = (), cruise_speed: float | None = None,
@@ -152,7 +153,7 @@ class SimRobot:
             self._servers.append(dds.ServiceServer(
                 node, f"/{which}_costmap/clear_entirely_{which}_costmap", idl.ClearEntireCostmap_Request,
                 idl.ClearEntireCostmap_Response, self._clear(nav, which)))
-        for name in self.LIFECYCLE:
+        for name in (*self.LIFECYCLE, *self.NAV_LIFECYCLE):
             self.lifecycle[name] = ST.PRIMARY_STATE_ACTIVE
             self._servers.append(dds.ServiceServer(node, f"{name}/get_state", idl.GetState_Request,
                                                    idl.GetState_Response, self._get_state(name)))
@@ -252,9 +253,14 @@ class SimRobot:
         self.driver.navigation.set_speed_limit(limit, percentage=bool(m.percentage))
 
     def _on_fault(self, samples: list, _now: float) -> None:
+        nav_faults = {"nav_crash": "crash", "nav_hang": "hang", "nav_fail_until_restart": "fail_until_restart"}
         for m in samples:
             try:
-                fault = parse_fault(json.loads(m.data))
+                data = json.loads(m.data)
+                if data.get("kind") in nav_faults:  # the Nav2 stand-in's servers
+                    getattr(self.driver.navigation, nav_faults[data["kind"]])(data.get("component", "planner_server"))
+                    continue
+                fault = parse_fault(data)
                 self.sim.faults.apply(fault)
             except Exception as exc:
                 log.warning("sim_robot_bad_fault", data=m.data, error=repr(exc))
@@ -344,8 +350,13 @@ class SimRobot:
         return clear
 
     # -- lifecycle -------------------------------------------------------------------------------
+    def _state(self, name: str) -> ComponentState:
+        if name in self.NAV_LIFECYCLE:
+            return self.driver.navigation.components[name].state
+        return self.sim.component_state(name)
+
     def _primary_state(self, name: str) -> int:
-        state = self.sim.component_state(name)
+        state = self._state(name)
         if state is ComponentState.ACTIVE:
             return ST.PRIMARY_STATE_ACTIVE
         if state is ComponentState.STARTING:
@@ -359,6 +370,8 @@ class SimRobot:
         labels = {1: "unconfigured", 2: "inactive", 3: "active", 4: "finalized", 13: "activating"}
 
         def get_state(_request: Any) -> Any:
+            if name in self.NAV_LIFECYCLE and self.driver.navigation.components[name].hung:
+                return None  # a hung server does not answer
             sid = self._primary_state(name)
             return idl.GetState_Response(current_state=ST(sid, labels.get(sid, "unknown")))
 
@@ -369,8 +382,12 @@ class SimRobot:
             t = request.transition.id
             state = self._primary_state(name)
             ok = False
+            nav = self.driver.navigation if name in self.NAV_LIFECYCLE else None
             if t == T.TRANSITION_DEACTIVATE and state == ST.PRIMARY_STATE_ACTIVE:
-                self.sim.crash(name, reason="deactivated")
+                if nav is not None:
+                    nav.crash(name)
+                else:
+                    self.sim.crash(name, reason="deactivated")
                 self.lifecycle[name] = ST.PRIMARY_STATE_INACTIVE
                 ok = True
             elif t == T.TRANSITION_CLEANUP and state == ST.PRIMARY_STATE_INACTIVE:
@@ -380,7 +397,7 @@ class SimRobot:
                 self.lifecycle[name] = ST.PRIMARY_STATE_INACTIVE
                 ok = True
             elif t == T.TRANSITION_ACTIVATE and state == ST.PRIMARY_STATE_INACTIVE:
-                ok = await self.sim.restart(name)
+                ok = await (nav.restart(name) if nav is not None else self.sim.restart(name))
                 self.lifecycle[name] = ST.PRIMARY_STATE_ACTIVE if ok else ST.PRIMARY_STATE_UNCONFIGURED
             log.info("sim_robot_lifecycle", component=name, transition=int(t), from_state=state, success=ok)
             return idl.ChangeState_Response(success=ok)

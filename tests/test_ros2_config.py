@@ -25,6 +25,8 @@ navigation:
 components:
   lidar: {streams: [scan], rate_hz: 10, lifecycle_node: /lidar_driver}
   wheels: {kind: base, streams: [odom], rate_hz: 20}
+  amcl: {kind: localization, streams: [pose], depends_on: [wheels]}
+robot: {radius: 0.155, max_linear: 0.9, max_angular: 3.0, capacity_ah: 3.5}
 """
 
 
@@ -41,6 +43,9 @@ def test_config_file_and_from_args(tmp_path, monkeypatch):
     assert infos["lidar"].restartable and not infos["wheels"].restartable
     assert infos["wheels"].kind == "base" and infos["lidar"].expected_rate_hz == 10
     assert driver.component_state("lidar") is ComponentState.UNKNOWN
+    assert infos["amcl"].extra["depends_on"] == ("wheels",)
+    info = driver.robot_info()
+    assert (info.radius, info.max_linear, info.capacity_ah) == (0.155, 0.9, 3.5)
     default = Ros2Driver.from_args(argparse.Namespace(ros2_config=None))
     assert default.config.domain_id == 7  # ROS_DOMAIN_ID when the file does not say
 

@@ -333,3 +333,64 @@ async def test_navigation_api_over_nav2_interfaces(domain):
             await driver.stop()
     infos = {c.name: c for c in driver.components()}
     assert not infos["wheels"].restartable and infos["lidar"].restartable
+
+
+AUTONOMY_TREE = ROOT / "trees" / "autonomy.xml"
+
+
+def record_failed_reports(supervisor) -> list[tuple[float, str]]:
+    """Record every FAILED answer of ``supervisor.health`` (the tree may act on it, and request
+    the restart, before the supervisor's 10 ms check writes the FAILED event)."""
+    reported: list[tuple[float, str]] = []
+    health = supervisor.health
+
+    def recording(name: str) -> Health:
+        h = health(name)
+        if h is Health.FAILED:
+            reported.append((supervisor.clock(), name))
+        return h
+
+    supervisor.health = recording
+    return reported
+
+
+@pytest.mark.skipif(not AUTONOMY_TREE.exists(), reason="trees/autonomy.xml not present")
+async def test_lidar_2_with_the_project_autonomy_tree(domain):
+    """The same tree as in simulation (trees/autonomy.xml + nodes), now on a ROS 2 robot."""
+    nodes = pytest.importorskip("nodes")
+    pytest.importorskip("nodes.nav2")  # the Nav2-named nodes (NavigateToPose, ComputePathToPose)
+    async with sim_robot(domain, "--robot", "rosbot2") as _robot:
+        driver = Ros2Driver(Ros2Config(domain_id=domain))
+        runtime = AutonomyRuntime(driver, realtime=True, register=[nodes.register_all])
+        runtime.load_tree(AUTONOMY_TREE)
+        reported = record_failed_reports(runtime.supervisor)
+        bb = runtime.tree.root_blackboard
+        bb.set("goal_status", "IDLE")
+        truth: list[tuple[float, float, float]] = []
+        await runtime.start()
+        try:
+            driver.node.subscription("sim/ground_truth", idl.PoseStamped, dds.DEFAULT,
+                                     lambda s, now: truth.extend((now, m.pose.position.x, m.pose.position.y) for m in s))
+            fault = driver.node.publisher("sim/fault", idl.String)
+            names = [c.name for c in driver.components()]
+            await wait_for(lambda: runtime.supervisor.all_healthy(names), 10, f"all of {names} healthy")
+            bb.set("goal", GOAL)
+            bb.set("goal_status", "PENDING")
+            await wait_for(lambda: truth and truth[-1][1] > SPAWN.x + 0.3, 20, "the robot to move 0.3 m")
+            fault.write(idl.String('{"kind": "crash", "component": "lidar"}'))
+            crash_time = runtime.clock()
+            await wait_for(lambda: bb.get("goal_status", default="") in ("SUCCEEDED", "ABORTED", "REFUSED"), 40,
+                           "the goal to finish")
+            status = bb.get("goal_status")
+        finally:
+            await runtime.stop()
+    events = [e for e in runtime.supervisor.events_of("lidar") if e.t >= crash_time]
+    failed = [e.t for e in events if e.state is Health.FAILED] + [t for t, n in reported if n == "lidar"
+                                                                  and t >= crash_time]
+    assert failed and min(failed) - crash_time < 1.5, (events, reported[:3])
+    states = [e.state for e in events]
+    assert Health.RESTARTING in states and states[-1] is Health.OK, events
+    assert status == "SUCCEEDED"
+    error = math.hypot(truth[-1][1] - GOAL.x, truth[-1][2] - GOAL.y)
+    assert error <= 0.25, f"goal missed by {error:.3f} m (ground truth)"
+    assert runtime.supervisor.health("planner_server") is Health.OK  # watched through lifecycle polls

@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 
 class _Model(BaseModel):
@@ -85,10 +85,16 @@ class Navigation(_Model):
 
 class Component(_Model):
     kind: str = "sensor"
+    heartbeat: Literal["streams", "lifecycle"] = Field(
+        "streams", description="what proves it alive: data on its streams, or (for servers such as "
+                               "Nav2's) its lifecycle node answering get_state with 'active', polled "
+                               "at lifecycle.poll_hz (its stream is then lifecycle/<name>)")
     streams: list[str] = Field(default_factory=list)
     rate_hz: float = Field(0.0, ge=0)
     lifecycle_node: str | None = Field(None, description="ROS node offering <node>/change_state and "
                                        "<node>/get_state; None = watched only, not restartable")
+    depends_on: list[str] = Field(default_factory=list, description="components it cannot work without "
+                                  "(the supervisor restarts those first)")
 
 
 def _default_components() -> dict[str, Component]:
@@ -99,7 +105,10 @@ def _default_components() -> dict[str, Component]:
         "bumper": Component(streams=["bumper"], rate_hz=10.0, lifecycle_node="bumper"),
         "battery": Component(streams=["battery"], rate_hz=1.0, lifecycle_node="battery"),
         "localization": Component(kind="localization", streams=["pose"], rate_hz=10.0,
-                                  lifecycle_node="localization"),
+                                  lifecycle_node="localization", depends_on=["odom"]),
+        "planner_server": Component(kind="navigation", heartbeat="lifecycle", lifecycle_node="planner_server"),
+        "controller_server": Component(kind="navigation", heartbeat="lifecycle", lifecycle_node="controller_server"),
+        "behavior_server": Component(kind="navigation", heartbeat="lifecycle", lifecycle_node="behavior_server"),
     }
 
 
@@ -116,12 +125,29 @@ class Validation(_Model):
     max_voltage: float = Field(1000.0, gt=0)
 
 
+class RobotConfig(_Model):
+    """What the autonomy layer may know about the robot (``RobotInfo``); defaults: TurtleBot3
+    burger. ``null`` for the whole section: the runtime's defaults."""
+
+    radius: float = Field(0.105, gt=0)
+    max_linear: float = Field(0.22, gt=0)
+    max_angular: float = Field(2.84, gt=0)
+    capacity_ah: float = Field(1.8, gt=0)
+    voltage_nominal: float = Field(11.1, gt=0)
+    idle_power_w: float = Field(6.0, ge=0)
+    k_linear: float = Field(12.0, ge=0, description="W per m/s")
+    k_angular: float = Field(1.0, ge=0, description="W per rad/s")
+
+
 class LifecycleConfig(_Model):
     transition_timeout: float = Field(3.0, gt=0, description="per change_state call (activate may take "
                                       "as long as the driver needs to start)")
+    poll_hz: float = Field(2.0, gt=0, le=50, description="get_state polling of heartbeat: lifecycle components")
 
 
 class Ros2Config(_Model):
+    """The whole file. ``components`` replaces the default set when given."""
+
     domain_id: int = Field(0, ge=0, le=232)
     namespace: str = ""
     cyclonedds_uri: str | None = Field(None, description="Cyclone DDS XML or file:// URI; default: "
@@ -132,6 +158,18 @@ class Ros2Config(_Model):
     components: dict[str, Component] = Field(default_factory=_default_components)
     validation: Validation = Field(default_factory=Validation)
     lifecycle: LifecycleConfig = Field(default_factory=LifecycleConfig)
+    robot: RobotConfig | None = Field(default_factory=RobotConfig)
+
+    @model_validator(mode="after")
+    def _lifecycle_heartbeats(self) -> Ros2Config:
+        for name, comp in self.components.items():
+            if comp.heartbeat == "lifecycle":
+                if not comp.lifecycle_node:
+                    raise ValueError(f"components.{name}: heartbeat 'lifecycle' needs a lifecycle_node")
+                comp.streams = [f"lifecycle/{name}"]
+                if comp.rate_hz == 0:
+                    comp.rate_hz = self.lifecycle.poll_hz
+        return self
 
     @classmethod
     def load(cls, path: str | Path) -> Ros2Config:

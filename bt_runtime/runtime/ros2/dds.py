@@ -295,8 +295,8 @@ class ServiceClient:
 
 
 class ServiceServer:
-    """A ROS 2 service server; ``handler(request) -> response`` may be a coroutine function.
-    Requests are served concurrently, each in its own task."""
+    """A ROS 2 service server; ``handler(request) -> response`` may be a coroutine function
+    (returning None sends no reply). Requests are served concurrently, each in its own task."""
 
     def __init__(self, node: DdsNode, name: str, request_type: type, response_type: type,
                  handler: Callable[[Any], Any], qos: QosProfile = SERVICES):
@@ -325,7 +325,7 @@ class ServiceServer:
         except Exception:
             log.exception("service_handler_failed", service=self.name)
             return
-        if self.node.closed:
+        if self.node.closed or response is None:  # None: no reply (a hung server)
             return
         self.writer.write(idl.wrap(sample.guid, sample.seq, response))
         self.served += 1

@@ -40,6 +40,7 @@ from ..messages import (
     Odometry,
     Path,
     Pose2D,
+    RobotInfo,
     Twist,
 )
 from . import dds, idl
@@ -563,6 +564,7 @@ class Ros2Driver:
         self._lifecycle: dict[str, tuple[dds.ServiceClient, dds.ServiceClient]] = {}
         self.lifecycle_states: dict[str, int] = {}
         self._restarting: set[str] = set()
+        self._poller: asyncio.Task | None = None
         self.sent = 0
         self.send_errors = 0
 
@@ -618,6 +620,9 @@ class Ros2Driver:
                     dds.ServiceClient(node, comp.lifecycle_node.rstrip("/") + "/change_state",
                                       idl.ChangeState_Request, idl.ChangeState_Response))
         self.navigation.attach(node)
+        polled = [n for n, c in cfg.components.items() if c.heartbeat == "lifecycle"]
+        if polled:
+            self._poller = self.loop.create_task(self._poll_lifecycles(polled), name="ros2.lifecycle_poll")
         log.info("ros2_driver_started", domain_id=cfg.domain_id, namespace=cfg.namespace or "/",
                  streams=sorted(self._readers), cmd_vel=node.fq(cmd.name), stamped=cmd.stamped)
 
@@ -625,6 +630,11 @@ class Ros2Driver:
         if self.node is None:
             return
         await self.navigation.close()
+        if self._poller is not None:
+            self._poller.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._poller
+            self._poller = None
         node, self.node = self.node, None
         self._cmd_writer = None
         node.close()
@@ -654,6 +664,28 @@ class Ros2Driver:
                     callback(msg)
 
         return on_samples
+
+    async def _poll_lifecycles(self, names: list[str]) -> None:
+        """Heartbeats of servers without a data stream (Nav2's): their lifecycle node answers
+        get_state with 'active' -> a ``ComponentState.ACTIVE`` message on ``lifecycle/<name>``."""
+        period = 1.0 / self.config.lifecycle.poll_hz
+        timeout = min(self.config.lifecycle.transition_timeout, 0.9 * period)
+        loop = self.loop
+        start = loop.time()
+        k = 0
+
+        async def poll(name: str) -> None:
+            state = await self.get_lifecycle_state(name, timeout=timeout)
+            if state == idl.State.PRIMARY_STATE_ACTIVE:
+                stream = f"lifecycle/{name}"
+                self.last_seen[stream] = loop.time()
+                for callback in tuple(self._subscribers.get(stream, ())):
+                    callback(ComponentState.ACTIVE)
+
+        while True:
+            await asyncio.gather(*(poll(n) for n in names), return_exceptions=True)
+            k += 1
+            await asyncio.sleep(max(0.0, start + k * period - loop.time()))
 
     def _count_drop(self, stream: str, reason: str) -> None:
         self.dropped[stream] += 1
@@ -707,12 +739,19 @@ class Ros2Driver:
     def components(self) -> list[ComponentInfo]:
         infos = []
         for name, comp in self.config.components.items():
-            streams = tuple(s for s in comp.streams if s in self._readers or self.node is None)
+            streams = tuple(s for s in comp.streams
+                            if s in self._readers or s.startswith("lifecycle/") or self.node is None)
             infos.append(ComponentInfo(name=name, kind=comp.kind, streams=streams,
                                        restartable=comp.lifecycle_node is not None,
                                        expected_rate_hz=comp.rate_hz, state=self.component_state(name),
-                                       extra={"lifecycle_node": comp.lifecycle_node}))
+                                       extra={"lifecycle_node": comp.lifecycle_node,
+                                              "depends_on": tuple(comp.depends_on)}))
         return infos
+
+    def robot_info(self) -> RobotInfo:
+        """The robot's size, limits and power model, from the config's ``robot`` section."""
+        robot = self.config.robot
+        return RobotInfo(**robot.model_dump()) if robot is not None else RobotInfo()
 
     def component_state(self, name: str) -> ComponentState:
         comp = self.config.components.get(name)
@@ -726,13 +765,13 @@ class Ros2Driver:
         now = self.loop.time() if self.loop is not None else 0.0
         return ComponentState.ACTIVE if now - max(seen) <= self._timeout(name) else ComponentState.INACTIVE
 
-    async def get_lifecycle_state(self, name: str) -> int | None:
-        """The component's lifecycle primary state id (None: no answer or no lifecycle node)."""
+    async def get_lifecycle_state(self, name: str, timeout: float | None = None) -> int | None:
+        """The component's lifecycle state id (None: no answer or no lifecycle node)."""
         clients = self._lifecycle.get(name)
         if clients is None:
             return None
         try:
-            response = await clients[0].call(idl.GetState_Request(), self.config.lifecycle.transition_timeout)
+            response = await clients[0].call(idl.GetState_Request(), timeout or self.config.lifecycle.transition_timeout)
         except dds.ServiceError:
             return None
         self.lifecycle_states[name] = int(response.current_state.id)
