@@ -87,7 +87,8 @@ class SimRobot:
 
     def __init__(self, world: str = "apartment", robot: str = "burger", seed: int = 0, domain_id: int = 0, *,
                  namespace: str = "", crashes: list[tuple[str, float]] | tuple = (), cruise_speed: float | None = None,
-                 stamped_cmd_vel: bool = False, cyclonedds_uri: str | None = None):
+                 stamped_cmd_vel: bool = False, cyclonedds_uri: str | None = None,
+                 goal_tolerance: float | None = None):
         self.world, self.robot, self.seed = world, robot, seed
         self.domain_id = domain_id
         self.namespace = namespace
@@ -95,6 +96,7 @@ class SimRobot:
         self.cruise_speed = cruise_speed
         self.stamped_cmd_vel = stamped_cmd_vel
         self.cyclonedds_uri = cyclonedds_uri
+        self.goal_tolerance = goal_tolerance
         self.driver: SimDriver | None = None
         self.node: dds.DdsNode | None = None
         self.lifecycle: dict[str, int] = {}
@@ -110,7 +112,10 @@ class SimRobot:
 
     # -- start / stop ------------------------------------------------------------------------------
     async def start(self) -> None:
-        self.driver = driver = SimDriver(self.world, self.robot, seed=self.seed, cruise_speed=self.cruise_speed)
+        nav_params = ({"controller": {"xy_goal_tolerance": self.goal_tolerance}}
+                      if self.goal_tolerance is not None else None)
+        self.driver = driver = SimDriver(self.world, self.robot, seed=self.seed, cruise_speed=self.cruise_speed,
+                                         nav_params=nav_params)
         sim = driver.sim
         self.node = node = dds.DdsNode(self.domain_id, namespace=self.namespace, cyclonedds_uri=self.cyclonedds_uri)
         pub = node.publisher

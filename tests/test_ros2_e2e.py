@@ -4,7 +4,9 @@
 * Lidar_2 (the paper): rosbot2 navigating at 0.25 m/s to a goal 1 m ahead; the lidar driver
   crashes while driving; the supervisor sees it FAILED, the tree has it restarted through its
   lifecycle services, health returns to OK and the goal is reached within 0.25 m, judged from
-  the recorded supervisor events and the simulator's ground truth.
+  the recorded supervisor events and the simulator's ground truth (the navigator's own
+  tolerance is 0.1 m, as in the project's scenario spec, so localization drift during the
+  outage has a margin).
 * A robot process that is killed: every component FAILED, a running goal ends ABORTED.
 * The navigation API over Nav2's actions, services and topics.
 * Malformed and absurd messages are dropped and counted, never delivered, never fatal.
@@ -138,7 +140,7 @@ LIDAR_TREE = """<root BTCPP_format="4"><BehaviorTree ID="Main">
 
 
 async def test_lidar_2_crash_while_navigating_restart_and_reach_goal(domain):
-    async with sim_robot(domain, "--robot", "rosbot2") as _robot:
+    async with sim_robot(domain, "--robot", "rosbot2", "--goal-tolerance", "0.1") as _robot:
         driver = Ros2Driver(Ros2Config(domain_id=domain))
         runtime = AutonomyRuntime(driver, realtime=True, register=[register])
         runtime.load_tree(LIDAR_TREE)
@@ -359,7 +361,7 @@ async def test_lidar_2_with_the_project_autonomy_tree(domain):
     """The same tree as in simulation (trees/autonomy.xml + nodes), now on a ROS 2 robot."""
     nodes = pytest.importorskip("nodes")
     pytest.importorskip("nodes.nav2")  # the Nav2-named nodes (NavigateToPose, ComputePathToPose)
-    async with sim_robot(domain, "--robot", "rosbot2") as _robot:
+    async with sim_robot(domain, "--robot", "rosbot2", "--goal-tolerance", "0.1") as _robot:
         driver = Ros2Driver(Ros2Config(domain_id=domain))
         runtime = AutonomyRuntime(driver, realtime=True, register=[nodes.register_all])
         runtime.load_tree(AUTONOMY_TREE)

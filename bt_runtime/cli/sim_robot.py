@@ -30,6 +30,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    help="crash a component T seconds after start (repeatable), e.g. lidar@3")
     p.add_argument("--cruise-speed", type=float, default=None, metavar="V",
                    help="the navigation stand-in's cruise speed (default 0.25 m/s)")
+    p.add_argument("--goal-tolerance", type=float, default=None, metavar="M",
+                   help="the navigator's xy goal tolerance (default 0.25 m, TurtleBot3's Nav2 file; "
+                        "the project's scenarios use 0.1)")
     p.add_argument("--stamped-cmd-vel", action="store_true", help="cmd_vel is TwistStamped (Jazzy option)")
     p.add_argument("--loopback", action="store_true", help="DDS on 127.0.0.1 only (unless CYCLONEDDS_URI is set)")
     p.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds")
@@ -65,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     uri = dds.loopback_config() if args.loopback and not os.environ.get("CYCLONEDDS_URI") else None
     robot = SimRobot(args.world, args.robot, seed=args.seed, domain_id=domain, namespace=args.namespace,
                      crashes=crashes, cruise_speed=args.cruise_speed, stamped_cmd_vel=args.stamped_cmd_vel,
-                     cyclonedds_uri=uri)
+                     cyclonedds_uri=uri, goal_tolerance=args.goal_tolerance)
     try:
         asyncio.run(run_sim_robot(robot, args.duration))
     except (FileNotFoundError, KeyError) as exc:
