@@ -45,6 +45,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--realtime", action="store_true", help="pace the simulation to the wall clock")
     p.add_argument("--driver", default="sim", choices=["sim", "ros2"])
     p.add_argument("--config", type=Path, default=None, help="runtime configuration (YAML)")
+    p.add_argument("--ros2-config", type=Path, default=None, metavar="FILE",
+                   help="--driver ros2: topics, QoS, domain, Nav2 names, components (YAML, see docs/ros2.md)")
     p.add_argument("--register", action="append", default=[], metavar="MODULE:FUNC",
                    help="extra node registration function called with the factory (repeatable)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
