@@ -52,7 +52,7 @@ def test_node_writes_reach_typed_parent_entries_through_subtrees(remap):
     bb = tree.root_blackboard
     assert bb.get("code") == 105 and bb.get_entry("code").type == UINT16
     assert bb.get("path") is PLAN
-    assert [k for rec in tree.subtrees[1:] for k in rec.blackboard] == []  # nothing local
+    assert [k for rec in tree.subtrees[1:] for k in rec.blackboard.keys()] == []  # noqa: SIM118 - Blackboard is not iterable
 
 
 def test_host_writes_into_remapped_typed_entries_stay_strict_like_btcpp():

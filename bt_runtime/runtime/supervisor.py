@@ -301,6 +301,11 @@ class SystemSupervisor:
         record = self.components[name]
         if record.state is Health.DEAD:
             return False
+        if record.state is Health.OK and self.health(name) is Health.FAILED:
+            # its timeout expired but the watchdog has not run yet: record the failure first
+            record.failures += 1
+            self._set_state(record, Health.FAILED,
+                            f"silent for {self.clock() - record.last_seen:.2f} s (timeout {record.timeout} s)")
         cfg = self.config
         record.restarts += 1
         started = self.clock()
