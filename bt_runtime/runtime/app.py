@@ -154,8 +154,7 @@ class AutonomyRuntime:
         self._tick_origin = self._grid_origin + self.config.tick.phase * period
         self._service_tasks = [spawn(self.supervisor.run(), name="supervisor"),
                                spawn(self.backup.run(), name="backup"),
-                               spawn(self.gate.run(self._tick_origin + self.config.gate.phase * period),
-                                     name="gate")]
+                               spawn(self.gate.run(), name="gate")]
         self.running = True
         if tick:
             self.gate.heartbeat()  # the first tick is due within one period: no spurious dead-man

@@ -28,7 +28,8 @@ class ComponentWatch(_Model):
 
 
 class SupervisorConfig(_Model):
-    period: float = Field(0.01, gt=0, description="watchdog check period (s)")
+    max_sleep: float = Field(0.5, gt=0, description="the watchdog wakes at each component's deadline, "
+                                                     "and at least this often")
     default_timeout: float = Field(1.0, gt=0, description="the paper's 1 s; a component that publishes "
                                                            "slower than 2.5 Hz gets 2.5 of its periods")
     startup_grace: float = Field(2.0, ge=0, description="time allowed for a first message")
@@ -49,9 +50,8 @@ class BackupConfig(_Model):
 
 
 class GateConfig(_Model):
-    rate_hz: float = Field(100.0, gt=0)
-    phase: float = Field(0.1, ge=0, lt=1, description="the gate runs this fraction of a tick period after "
-                                                       "each tick, so tree commands go out at once")
+    min_rate_hz: float = Field(10.0, gt=0, description="the gate publishes after every tick and every "
+                                                       "navigation command, and at least this often")
     deadman_timeout: float = Field(0.1, gt=0, description="tree heartbeat older than this: zero")
     nav_stale_timeout: float = Field(0.25, gt=0, description="navigation command older than this: ignored")
     tree_stale_timeout: float = Field(0.2, gt=0, description="tree command older than this: ignored")

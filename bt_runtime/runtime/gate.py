@@ -77,14 +77,21 @@ class DecisionGate:
 
     def _on_nav(self, twist: Twist) -> None:
         self._nav = twist
-        self._nav_stamp = self.clock()
-        if self.config.passthrough:
-            self._apply(self.clock())  # a plain Nav2 setup forwards every message at once
+        now = self.clock()
+        self._nav_stamp = now
+        # forward at once (a plain Nav2 setup does the same in pass-through mode); when the
+        # navigation command is not the chosen source this republishes the current decision
+        self._apply(now)
 
     # -- inputs (non-blocking; the tree and the runtime call these) ------------------------------
     def heartbeat(self) -> None:
-        """The tree is alive (the tick loop calls this every tick)."""
+        """The tree is alive (the tick loop calls this before every tick)."""
         self._heartbeat = self.clock()
+
+    def after_tick(self) -> None:
+        """Publish the decision right after a tick, so the tree's commands go out at once."""
+        if not self.config.passthrough:
+            self._apply(self.clock())
 
     def set_tree_command(self, linear: float, angular: float) -> None:
         """Drive with this command; it must be refreshed (it goes stale after
@@ -157,17 +164,33 @@ class DecisionGate:
             setter(linear)
 
     # -- output --------------------------------------------------------------------------------
-    async def run(self, start_at: float | None = None) -> None:
-        """Publish the gate's decision every period, on absolute deadlines from ``start_at``."""
+    async def run(self) -> None:
+        """The gate's watchdog: wake up when the tree's heartbeat or the chosen source would go
+        stale (and at least ``min_rate_hz``), and publish the decision then. Without it, a
+        tree that stopped ticking would leave the last command standing."""
         loop = asyncio.get_running_loop()
-        period = 1.0 / self.config.rate_hz
-        start = loop.time() if start_at is None else start_at
-        k = max(0, int((loop.time() - start) // period))
         while True:
-            k += 1
-            await asyncio.sleep(max(0.0, start + k * period - loop.time()))
+            now = loop.time()
+            await asyncio.sleep(max(0.0, self.next_deadline(now) - now))
             if not self.config.passthrough:
                 self._apply(loop.time())
+
+    def next_deadline(self, now: float) -> float:
+        """The next instant the decision can change by itself (a heartbeat or the chosen
+        source going stale), or ``1 / min_rate_hz`` from now. Deadlines already passed have
+        been applied, so only future ones count."""
+        cfg = self.config
+        deadline = now + 1.0 / cfg.min_rate_hz
+        if not cfg.passthrough:
+            candidates = [self._heartbeat + cfg.deadman_timeout + 1e-6]
+            if self.source == TREE:
+                candidates.append(self._tree_stamp + cfg.tree_stale_timeout + 1e-6)
+            elif self.source == NAV:
+                candidates.append(self._nav_stamp + cfg.nav_stale_timeout + 1e-6)
+            for candidate in candidates:
+                if now < candidate < deadline:
+                    deadline = candidate
+        return deadline
 
     def decide(self, now: float) -> tuple[str, Twist, str]:
         """(source, command before limits, reason) for this instant."""

@@ -167,15 +167,35 @@ class SystemSupervisor:
 
     # -- the watchdog task -----------------------------------------------------------------------
     async def run(self) -> None:
-        """Check every component each period, on absolute deadlines."""
+        """Wake up exactly when the next component could time out, and check.
+
+        Messages only move a component's deadline later, so sleeping until the earliest
+        deadline (and at least every ``max_sleep`` s) detects a silence exactly ``timeout``
+        after the last message, without polling.
+        """
         loop = asyncio.get_running_loop()
-        period = self.config.period
-        start = loop.time()
-        k = 0
         while True:
-            k += 1
-            await asyncio.sleep(max(0.0, start + k * period - loop.time()))
+            now = loop.time()
+            await asyncio.sleep(min(self.next_deadline(now), now + self.config.max_sleep) - now)
             self.check()
+
+    def next_deadline(self, now: float) -> float:
+        """The earliest time at which a watched component could become FAILED."""
+        best = float("inf")
+        grace = self.config.startup_grace
+        for record in self.components.values():
+            if not record.watched:
+                continue
+            if record.state is Health.OK and record.last_seen is not None:
+                deadline = record.last_seen + record.timeout
+            elif record.state is Health.UNKNOWN:
+                deadline = self._started_at + max(grace, record.timeout)
+            else:
+                continue
+            deadline += 1e-6  # just past the deadline: the check is strict
+            if now < deadline < best:
+                best = deadline
+        return best
 
     def check(self, now: float | None = None) -> None:
         now = self.clock() if now is None else now

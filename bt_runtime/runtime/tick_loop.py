@@ -150,8 +150,12 @@ class TickLoop:
         except Exception as exc:  # the loop never dies: log, halt, stop the robot, go on
             self.stats.add(lateness, time.perf_counter() - t0)
             self._on_error(exc)
+            if gate is not None:
+                gate.after_tick()
             return self.status
         self.stats.add(lateness, time.perf_counter() - t0)
+        if gate is not None:
+            gate.after_tick()
         if self._error_latched:
             self._error_latched = False
             if gate is not None:
