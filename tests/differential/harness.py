@@ -231,6 +231,7 @@ def run_oracle(case: Case) -> Trace:
             _oracle_set(bb, key, value)
     except Exception as exc:  # noqa: BLE001
         trace.error, trace.error_at = f"{type(exc).__name__}: {exc}", "setup"
+        _KEEP_ALIVE.append((factory, tree_))
         return trace
     getters = {"int": bb.get_int, "double": bb.get_double, "string": bb.get_string, "bool": bb.get_bool}
     for i in range(case.ticks):
@@ -258,6 +259,10 @@ def run_oracle(case: Case) -> Trace:
             except Exception:
                 row[key] = None
         trace.values.append(row)
-    leaves.log = []  # BT.CPP's Tree destructor halts the tree: not part of any step
-    del tree_
+    # BT.CPP's Tree destructor halts the tree; an _onHalted script that throws there aborts the
+    # whole process (an exception escaping a destructor). Keep the trees alive instead.
+    _KEEP_ALIVE.append((factory, tree_))
     return trace
+
+
+_KEEP_ALIVE: list[Any] = []
