@@ -138,6 +138,8 @@ def test_unreadable_files(factory, tmp_path):
     bad.write_bytes(b'<root BTCPP_format="4"><BehaviorTree ID="M"><A name="\xe9"/></BehaviorTree></root>')
     with pytest.raises(XMLLoadError, match="not valid UTF-8"):
         factory.create_tree_from_file(bad)
+    with pytest.raises(XMLLoadError, match="not valid UTF-8"):
+        factory.create_tree_from_text(bad.read_bytes())
 
 
 def test_line_numbers_refer_to_the_original_file(factory, tmp_path):

@@ -148,7 +148,11 @@ def parse_xml_text(text: str | bytes, file: str | None = None) -> XMLDocument:
     if isinstance(text, bytes):
         if len(text) > MAX_XML_BYTES:
             raise XMLLoadError(f"XML too large ({len(text)} bytes, limit {MAX_XML_BYTES}); refused", file=file)
-        text = text.decode("utf-8-sig")
+        try:
+            text = text.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise XMLLoadError(f"The XML is not valid UTF-8 ({exc.reason} at byte {exc.start})",
+                               file=file) from None
     if len(text) > MAX_XML_BYTES:
         raise XMLLoadError(f"XML too large ({len(text)} characters, limit {MAX_XML_BYTES}); refused",
                            file=file)
