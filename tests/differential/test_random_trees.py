@@ -44,13 +44,26 @@ def _conditions(draw) -> str:
 
 
 @st.composite
-def _node(draw, names: _Names, scripts: dict, depth: int) -> str:
+def _node(draw, names: _Names, scripts: dict, depth: int, subtrees: dict) -> str:
     leaf_only = depth >= 4
     kind = draw(st.sampled_from(["leaf"] * 4 + ([] if leaf_only else ["control"] * 3 + ["decorator"] * 2)))
     cond = draw(_conditions())
     if kind == "leaf":
-        leaf = draw(st.sampled_from(["C", "A", "R", "R", "Ok", "Fail", "Script", "ScriptCondition"]))
+        leaf = draw(st.sampled_from(["C", "A", "R", "R", "Ok", "Fail", "Script", "ScriptCondition", "SubTree",
+                                     "SetBlackboard", "WasEntryUpdated", "AlwaysSuccess"]))
         name = names.next()
+        if leaf == "SubTree" and depth < 3:
+            sub_id = f"Sub{len(subtrees)}"
+            subtrees[sub_id] = ""  # reserve the ID before drawing the body (nested subtrees)
+            subtrees[sub_id] = draw(_node(names, scripts, depth + 1, subtrees))
+            remap = draw(st.sampled_from([' _autoremap="true"', ' x="{x}" y="{y}"', ' x="{x}" y="{y}" v="{v}"']))
+            return f'<SubTree ID="{sub_id}" name="{name}"{remap}{cond}/>'
+        if leaf in ("SubTree", "AlwaysSuccess"):
+            return f'<AlwaysSuccess name="{name}"{cond}/>'
+        if leaf == "SetBlackboard":
+            return f'<SetBlackboard name="{name}" output_key="x" value="{draw(st.integers(0, 3))}"{cond}/>'
+        if leaf == "WasEntryUpdated":
+            return f'<WasEntryUpdated name="{name}" entry="x"{cond}/>'
         if leaf == "Script":
             return f'<Script name="{name}" code="x := x + 1"{cond}/>'
         if leaf == "ScriptCondition":
@@ -62,7 +75,7 @@ def _node(draw, names: _Names, scripts: dict, depth: int) -> str:
 
     def kids(lo: int, hi: int) -> str:
         count = draw(st.integers(lo, hi))
-        return "".join(draw(_node(names, scripts, depth + 1)) for _ in range(count))
+        return "".join(draw(_node(names, scripts, depth + 1, subtrees)) for _ in range(count))
 
     if kind == "control":
         ctl = draw(st.sampled_from(["Sequence", "Fallback", "AsyncSequence", "AsyncFallback",
@@ -72,12 +85,12 @@ def _node(draw, names: _Names, scripts: dict, depth: int) -> str:
             n = draw(st.integers(1, 3))
             s = draw(st.integers(-n - 1, n))
             f = draw(st.integers(-n - 1, n))
-            body = "".join(draw(_node(names, scripts, depth + 1)) for _ in range(n))
+            body = "".join(draw(_node(names, scripts, depth + 1, subtrees)) for _ in range(n))
             return f'<Parallel success_count="{s}" failure_count="{f}"{cond}>{body}</Parallel>'
         if ctl == "ParallelAll":
             n = draw(st.integers(1, 3))
             m = draw(st.integers(-n, n))
-            body = "".join(draw(_node(names, scripts, depth + 1)) for _ in range(n))
+            body = "".join(draw(_node(names, scripts, depth + 1, subtrees)) for _ in range(n))
             return f'<ParallelAll max_failures="{m}"{cond}>{body}</ParallelAll>'
         if ctl in ("IfThenElse", "WhileDoElse"):
             return f"<{ctl}{cond}>{kids(2, 3)}</{ctl}>"
@@ -88,8 +101,9 @@ def _node(draw, names: _Names, scripts: dict, depth: int) -> str:
         return f"<{ctl}{cond}>{kids(1, 3)}</{ctl}>"
 
     dec = draw(st.sampled_from(["Inverter", "ForceSuccess", "ForceFailure", "KeepRunningUntilFailure",
-                                "Repeat", "RetryUntilSuccessful", "RunOnce", "Precondition", "LoopInt"]))
-    child = draw(_node(names, scripts, depth + 1))
+                                "Repeat", "RetryUntilSuccessful", "RunOnce", "Precondition", "LoopInt",
+                                "SkipUnlessUpdated"]))
+    child = draw(_node(names, scripts, depth + 1, subtrees))
     if dec == "Repeat":
         return f'<Repeat num_cycles="{draw(st.sampled_from([-2, 0, 1, 2, 3]))}"{cond}>{child}</Repeat>'
     if dec == "RetryUntilSuccessful":
@@ -99,6 +113,8 @@ def _node(draw, names: _Names, scripts: dict, depth: int) -> str:
     if dec == "Precondition":
         els = draw(st.sampled_from(["SUCCESS", "FAILURE", "RUNNING", "SKIPPED"]))
         return f'<Precondition if="x &lt; {draw(st.integers(0, 3))}" else="{els}"{cond}>{child}</Precondition>'
+    if dec == "SkipUnlessUpdated":
+        return f'<SkipUnlessUpdated entry="{draw(st.sampled_from(["x", "{x}", "s"]))}"{cond}>{child}</SkipUnlessUpdated>'
     if dec == "LoopInt":
         queue = ";".join(str(v) for v in draw(st.lists(st.integers(0, 9), max_size=3)))
         return f'<LoopInt queue="{queue}" value="{{v}}"{cond}>{child}</LoopInt>'
@@ -108,7 +124,9 @@ def _node(draw, names: _Names, scripts: dict, depth: int) -> str:
 @st.composite
 def cases(draw) -> Case:
     scripts: dict[str, list[str]] = {}
-    body = draw(_node(_Names(), scripts, 0))
+    subtrees: dict[str, str] = {}
+    body = draw(_node(_Names(), scripts, 0, subtrees))
+    extra = "".join(f'<BehaviorTree ID="{k}">{v}</BehaviorTree>' for k, v in subtrees.items())
     ticks = draw(st.integers(1, 8))
     modes = draw(st.lists(st.sampled_from(["exactly_once", "once"]), min_size=ticks, max_size=ticks))
     halts = draw(st.lists(st.integers(0, ticks - 1), max_size=2, unique=True))
@@ -116,7 +134,7 @@ def cases(draw) -> Case:
                                    st.fixed_dictionaries({"x": st.integers(0, 3),
                                                           "s": st.sampled_from(["1", "2", "2.0", "x"])}),
                                    max_size=3))
-    return Case("random", tree(body), scripts=scripts, ticks=ticks, mode=modes, halt_after=halts,
+    return Case("random", tree(body, extra), scripts=scripts, ticks=ticks, mode=modes, halt_after=halts,
                 setup={"y": 0, "x": 0, "s": "1"}, between=between,
                 keys={"x": "int", "y": "int", "v": "int", "s": "string"})
 
