@@ -394,6 +394,8 @@ def cast_value(value: Any, target: PortType) -> Any:
         if kind == "bool":
             if value in (0, 1):
                 return bool(value)
+            if value < 0:  # bool is unsigned for BT.CPP's convertNumber
+                raise BTRuntimeError("Value is negative and can't be converted to unsigned")
             raise BTRuntimeError("Implicit casting to bool is not allowed")
         if kind == "status":
             return NodeStatus(value)
@@ -407,6 +409,8 @@ def cast_value(value: Any, target: PortType) -> Any:
                 raise BTRuntimeError("Invalid floating point to integer conversion")
             return cast_value(int(value), target)
         if kind == "bool":
+            if value < 0.0:
+                raise BTRuntimeError("Value is negative and can't be converted to unsigned")
             return value != 0.0
         if kind == "enum":
             return cast_value(cast_value(value, INT64), target)

@@ -148,6 +148,8 @@ def test_numeric_blackboard_values_are_cast(factory):
     ('i="{x}"', "x := 2.5", "Invalid floating point to integer conversion"),
     ('u="{x}"', "x := -1", "Value is negative and can't be converted to unsigned"),
     ('b="{x}"', "x := 2", "Implicit casting to bool is not allowed"),
+    ('b="{x}"', "x := -1.5", "Value is negative and can't be converted to unsigned"),
+    ('b="{x}"', "x := -1", "Value is negative and can't be converted to unsigned"),
     ('i="{x}"', "x := 3000000000", "Value outside the max numerical limit."),
 ])
 def test_bad_blackboard_values(factory, attr, code, message):

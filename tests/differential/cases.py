@@ -435,6 +435,12 @@ case("script_condition_strings",
      tree('<Fallback><ScriptCondition code="s == \'go\'"/><A name="other"/></Fallback>'),
      setup={"s": "stop"}, between={1: {"s": "go"}}, ticks=2)
 case("script_condition_non_bool_errors", tree('<ScriptCondition code="5"/>'), ticks=1, error="tick")
+case("script_condition_negative_double_errors", tree('<ScriptCondition code="0 - 1.5"/>'), ticks=1, error="tick")
+case("precondition_negative_value_errors",
+     tree('<Sequence><Script code="d := 0 - 2.0"/><Precondition if="d"><A name="a"/></Precondition></Sequence>'),
+     ticks=1, error="tick")
+case("pre_condition_negative_and_zero",
+     tree('<Sequence><A name="a" _skipIf="-0.0"/><A name="b" _successIf="0.5"/></Sequence>'), ticks=1)
 case("set_blackboard_literal_and_copy",
      tree('<Sequence><SetBlackboard output_key="a" value="hello"/><SetBlackboard output_key="b" value="{a}"/>'
           '</Sequence>'), keys={"a": "string", "b": "string"}, ticks=1)
