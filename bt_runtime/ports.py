@@ -370,6 +370,11 @@ def cast_value(value: Any, target: PortType) -> Any:
     if kind in ("any", "anytype"):
         return value
     if kind == "string":
+        # BT.CPP stores bool and enums (NodeStatus too) as int64: they read back as "1", "2"...
+        if isinstance(value, bool):
+            return "1" if value else "0"
+        if isinstance(value, Enum) and isinstance(value.value, int):
+            return str(int(value.value))
         return value_to_string(value)
     if isinstance(value, bool):
         if kind == "bool":
@@ -436,6 +441,10 @@ def convert_exact(value: Any, target: PortType) -> tuple[bool, Any]:
     if kind == "bool":
         if isinstance(value, bool):
             return True, value
+        return False, None
+    if value is False and kind == "int" and target.lo is not None and target.lo < 0:
+        # BT.CPP's isCastingSafe<bool> into a signed integer compares false < bool(INT_MIN),
+        # which is true, so writing `false` into an int entry is refused (`true` is accepted).
         return False, None
     if isinstance(value, (bool, int, float)) and kind in ("int", "double"):
         try:

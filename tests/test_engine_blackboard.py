@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from bt_runtime import BehaviorTreeFactory, Blackboard, BTRuntimeError, LogicError, NodeStatus
-from bt_runtime.ports import DOUBLE, INT, STRING
+from bt_runtime.ports import DOUBLE, INT, STRING, UINT
 
 from .engine_helpers import doc
 
@@ -100,7 +100,13 @@ def test_numeric_writes_into_typed_entries():
     assert type(bb.get("i")) is int
     with pytest.raises(LogicError):
         bb.set("i", 2.5)
-    bb.set("i", True)  # a bool into an int entry is exact
+    bb.set("i", True)  # a bool into an int entry is exact...
+    with pytest.raises(LogicError):
+        bb.set("i", False)  # ...except false into a signed one (BT.CPP's isCastingSafe<bool> quirk)
+    bb.set("u", 3)
+    bb.get_entry("u").type = UINT
+    bb.set("u", False)
+    assert bb.get("u") == 0
     bb.set("flag", True)
     with pytest.raises(LogicError):
         bb.set("flag", 1)  # any int into a bool entry is rejected
@@ -142,6 +148,16 @@ def test_get_errors_and_conversions():
     assert bb.get("n", str) == "7"
     bb.set("s", "12")
     assert bb.get("s", int) == 12
+
+
+def test_bool_and_status_values_read_as_numbers_in_strings():
+    """BT.CPP stores bool and enums as int64, so they read back as "1", "0", "2"."""
+    bb = Blackboard()
+    bb.set("flag", True)
+    bb.set("off", False)
+    bb.set("st", NodeStatus.SUCCESS)
+    assert (bb.get("flag", str), bb.get("off", str), bb.get("st", str)) == ("1", "0", "2")
+    assert bb.get("flag", int) == 1
 
 
 def test_sequence_ids_and_stamps():

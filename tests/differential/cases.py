@@ -242,6 +242,11 @@ case("switch_case_from_script", tree('<Sequence><Script code="v := 4; w := 4"/>'
                                      '<Switch4 variable="{v}" case_1="1" case_2="{w}" case_3="3" case_4="4">'
                                      '<A name="s1"/><A name="s2"/><A name="s3"/><A name="s4"/><A name="def"/>'
                                      '</Switch4></Sequence>'), ticks=2)
+case("switch_reads_bool_as_number",
+     tree('<Sequence><ForceSuccess><SetBlackboard output_key="copy" value="{flag}"/></ForceSuccess>'
+          '<Switch2 variable="{flag}" case_1="1" case_2="true"><A name="s1"/><A name="s2"/><A name="def"/>'
+          '</Switch2></Sequence>'),
+     setup={"flag": True}, between={1: {"flag": False}}, keys={"flag": "string", "copy": "string"}, ticks=2)
 case("switch_skipped_child", tree('<Switch2 variable="1" case_1="1" case_2="2"><A name="s1" _skipIf="1"/>'
                                   '<A name="s2"/><A name="def"/></Switch2>'), ticks=2)
 
