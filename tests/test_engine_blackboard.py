@@ -116,6 +116,34 @@ def test_numeric_writes_into_typed_entries():
         bb.set("i", "many")
 
 
+def test_typed_empty_entry_keeps_the_first_value_kind():
+    """Any::copyInto: an empty entry (as ports create them) takes a number as it is; later
+    numbers are converted to the stored kind."""
+    bb = Blackboard()
+    bb.create_entry("n", INT)
+    bb.set("n", 2.0)  # accepted (exactly 2) and stored as a double
+    assert bb.get("n", str) == "2.000000" and bb.get("n", int) == 2
+    bb.set("n", 5)
+    assert type(bb.get("n")) is float and bb.get("n") == 5.0
+    with pytest.raises(LogicError):
+        bb.set("n", 2.5)
+
+
+def test_unsigned_entries_refuse_plain_ints():
+    """BT.CPP's isCastingSafe casts the unsigned limit to the source type first: a C++ int (a
+    Python int that fits 32 bits) is never accepted by an unsigned entry; larger ints are
+    range-checked against a 32-bit unsigned entry; a string still converts."""
+    bb = Blackboard()
+    bb.create_entry("u", UINT)
+    with pytest.raises(LogicError, match="Previously declared type \\[unsigned int\\], current type \\[int\\]"):
+        bb.set("u", 5)
+    bb.set("u", 3_000_000_000)
+    bb.set("u", "7")
+    assert bb.get("u") == 7
+    bb.set("u", 8.0)
+    assert bb.get("u") == 8
+
+
 def test_remapped_writes_are_strict():
     parent = Blackboard()
     parent.create_entry("speed", DOUBLE)
