@@ -98,6 +98,18 @@ def test_every_problem_of_every_tree_is_reported(tmp_path, capsys):
         assert text in line
 
 
+def test_bad_status_literal_reported_although_btcpp_loads_it(tmp_path, capsys):
+    bad = write(tmp_path, "status.xml", '<root BTCPP_format="4">\n<BehaviorTree ID="M">\n<Sequence>\n'
+                                        '<Precondition if="1" else="DONE"><AlwaysSuccess/></Precondition>\n'
+                                        '<LoopInt queue="" if_empty="{ok}" value="{v}"><AlwaysSuccess/></LoopInt>\n'
+                                        '</Sequence></BehaviorTree></root>')
+    code, out, _ = run(capsys, "--json", str(bad))
+    assert code == 1
+    assert json.loads(out) == [{"file": str(bad), "line": 4, "element": "Precondition",
+                                "message": 'The port with name "else" and value "DONE" can not be converted '
+                                           "to BT::NodeStatus"}]
+
+
 def test_json_output(tmp_path, capsys):
     bad = write(tmp_path, "bad.xml", BAD)
     code, out, _ = run(capsys, "--json", str(bad))

@@ -4,7 +4,8 @@ Each file gets a fresh factory (the builtins plus placeholder node types for eve
 the ``--models`` files), its document is registered (with its ``<include>``s) and every
 ``<BehaviorTree>`` the factory then knows is instantiated: node types, ports and literal
 conversions, subtree references and remappings, scripts. Every problem is reported as
-``file:line: <element>: message``; the exit code is 1 if there was any.
+``file:line: <element>: message``; the exit code is 1 if there was any. Literals of enum-typed
+ports (``else="DONE"``), which BT.CPP only converts when they are read, are checked too.
 
 A load-time problem (unknown node, wrong child count, ...) stops BT.CPP at the first one in a
 document. To report the problems of the *other* trees of the same file too, the tree holding
@@ -27,6 +28,7 @@ from typing import Any
 
 from ..errors import BehaviorTreeException, XMLLoadError
 from ..factory import BehaviorTreeFactory
+from ..ports import blackboard_key
 from ..xml.reader import element_children, parse_xml_text
 
 
@@ -175,10 +177,37 @@ def validate_file(file: str, models: list[tuple[str, str]], report) -> int:
             continue
         checked += 1
         try:
-            factory.create_tree(tree_id)
+            tree = factory.create_tree(tree_id)
         except Exception as exc:  # noqa: BLE001 - every failure is a problem to report
             report(_problem(exc, file))
+            continue
+        for problem in _literal_problems(tree, file):
+            report(problem)
     return checked
+
+
+def _literal_problems(tree: Any, file: str) -> list[Problem]:
+    """Literals of enum-typed ports (NodeStatus included): BT.CPP only converts them when the
+    node reads them, so a bad one loads and fails at run time. Report them now."""
+    problems = []
+    for node in tree.nodes():
+        manifest = node.config.manifest
+        if manifest is None:
+            continue
+        for name, raw in node.config.input_ports.items():
+            port = manifest.ports.get(name)
+            if port is None or port.type.kind not in ("status", "enum") or not isinstance(raw, str):
+                continue
+            if blackboard_key(raw, name) is not None:
+                continue
+            try:
+                port.type.from_string(raw, node.config.enums)
+            except BehaviorTreeException:
+                src_file, line = node.config.source
+                problems.append(Problem(str(src_file or file), line, node.registration_name,
+                                        f'The port with name "{name}" and value "{raw}" can not be converted '
+                                        f"to {port.type.name}"))
+    return problems
 
 
 # -- replacing a tree that failed to load --------------------------------------------------------
