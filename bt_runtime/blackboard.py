@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .errors import BTRuntimeError, LogicError
-from .ports import ANYTYPE, EMPTY, PortType, convert_exact, type_of_value, value_to_string
+from .ports import ANYTYPE, EMPTY, PortType, casting_safe, type_of_value, value_to_string
 
 
 class Entry:
@@ -39,6 +39,19 @@ class Entry:
 
     def __repr__(self) -> str:
         return f"Entry({self.value!r}, type={self.type.name}, seq={self.sequence_id})"
+
+
+def _copy_into(value: Any, entry: Entry) -> Any:
+    """BT.CPP ``Any::copyInto``: an empty entry takes the value as it is; otherwise the value is
+    converted to the kind already stored (int64, uint64, double, string), so an int entry that
+    first received 2.0 keeps holding doubles."""
+    old = entry.value
+    if old is EMPTY or type(old) is type(value):
+        return value
+    from .script.assign import _copy_into as copy_into
+    from .script.values import normalize
+
+    return copy_into(normalize(value), entry)
 
 
 def _type_mismatch(key: str, previous: PortType, current: PortType) -> LogicError:
@@ -153,6 +166,8 @@ class Blackboard:
         self._write_local(key, entry, value, value_type)
 
     def _write_local(self, key: str, entry: Entry, value: Any, static_type: PortType | None = None) -> None:
+        """BT.CPP ``Blackboard::set`` on an existing local entry (spec 8.4); ``static_type`` is
+        the value's declared type when the writer knows it (an output port's)."""
         declared = entry.type
         if not declared.strongly_typed:
             entry.type = static_type or type_of_value(value)
@@ -160,22 +175,20 @@ class Blackboard:
             return
         value_type = static_type or type_of_value(value)
         if value_type == declared:
+            new = value
+        elif isinstance(value, str):
+            if not declared.has_converter:  # e.g. NodeStatus or enum entries
+                raise self._set_mismatch(key, declared, value_type)
+            new = declared.from_string(value)
+        elif casting_safe(value, declared):
+            new = value  # kept as it is: copyInto below decides the stored kind
+        elif ((declared.kind == "custom" and declared.py_type is not None and isinstance(value, declared.py_type))
+              or (declared.kind == "list" and isinstance(value, list))):
             entry.write(value)
             return
-        if isinstance(value, str):
-            entry.write(declared.from_string(value))
-            return
-        ok, converted = convert_exact(value, declared)
-        if ok:
-            entry.write(converted)
-            return
-        if declared.kind == "custom" and declared.py_type is not None and isinstance(value, declared.py_type):
-            entry.write(value)
-            return
-        if declared.kind == "list" and isinstance(value, list):
-            entry.write(value)
-            return
-        raise self._set_mismatch(key, declared, value_type)
+        else:
+            raise self._set_mismatch(key, declared, value_type)
+        entry.write(_copy_into(new, entry))
 
     def _set_mismatch(self, key: str, previous: PortType, current: PortType) -> LogicError:
         return LogicError(f"Blackboard::set({key}): once declared, the type of a port shall not change. "

@@ -34,16 +34,13 @@ class XMLLoadError(LogicError):
         super().__init__(self._format())
 
     def _format(self) -> str:
-        where = []
+        """``file:line: <element>: message`` (``line N: ...`` for text input), as the CLI prints."""
         if self.file:
-            where.append(str(self.file))
-        if self.line:
-            where.append(str(self.line))
-        prefix = ":".join(where)
-        elem = f" <{self.element}>" if self.element else ""
-        if prefix or elem:
-            return f"{prefix}{elem}: {self.message}".lstrip()
-        return self.message
+            where = f"{self.file}:{self.line}" if self.line else str(self.file)
+        else:
+            where = f"line {self.line}" if self.line else ""
+        parts = [p for p in (where, f"<{self.element}>" if self.element else "") if p]
+        return ": ".join([*parts, self.message])
 
     def to_dict(self) -> dict:
         return {"file": self.file, "line": self.line, "element": self.element, "message": self.message}

@@ -157,6 +157,12 @@ class PortType:
 
     @property
     def has_converter(self) -> bool:
+        """Whether BT.CPP gives this type a string converter (``GetAnyFromStringFunctor``): not
+        for untyped ports, nor for enums (NodeStatus included), nor custom types without one.
+        Without it a literal is not checked when the tree is built, and a string written into
+        such a blackboard entry is a type mismatch."""
+        if self.kind in ("enum", "status"):
+            return False
         return self.kind not in ("any", "anytype", "custom") or self._from_string is not None
 
     def from_string(self, text: str, enums: dict[str, int] | None = None) -> Any:
@@ -370,6 +376,11 @@ def cast_value(value: Any, target: PortType) -> Any:
     if kind in ("any", "anytype"):
         return value
     if kind == "string":
+        # BT.CPP stores bool and enums (NodeStatus too) as int64: they read back as "1", "2"...
+        if isinstance(value, bool):
+            return "1" if value else "0"
+        if isinstance(value, Enum) and isinstance(value.value, int):
+            return str(int(value.value))
         return value_to_string(value)
     if isinstance(value, bool):
         if kind == "bool":
@@ -394,6 +405,8 @@ def cast_value(value: Any, target: PortType) -> Any:
         if kind == "bool":
             if value in (0, 1):
                 return bool(value)
+            if value < 0:  # bool is unsigned for BT.CPP's convertNumber
+                raise BTRuntimeError("Value is negative and can't be converted to unsigned")
             raise BTRuntimeError("Implicit casting to bool is not allowed")
         if kind == "status":
             return NodeStatus(value)
@@ -407,8 +420,10 @@ def cast_value(value: Any, target: PortType) -> Any:
                 raise BTRuntimeError("Invalid floating point to integer conversion")
             return cast_value(int(value), target)
         if kind == "bool":
+            if value < 0.0:
+                raise BTRuntimeError("Value is negative and can't be converted to unsigned")
             return value != 0.0
-        if kind == "enum":
+        if kind == "enum" or kind == "status":
             return cast_value(cast_value(value, INT64), target)
     if kind == "status" and isinstance(value, NodeStatus):
         return value
@@ -422,6 +437,59 @@ def cast_value(value: Any, target: PortType) -> Any:
                          f"[{type_of_value(value).name}] and [{target.name}]")
 
 
+def _wrap(value: int, bits: int, signed: bool) -> int:
+    """``static_cast`` of an integer to a ``bits``-wide (un)signed integer: two's complement."""
+    value &= (1 << bits) - 1
+    if signed and value >= 1 << (bits - 1):
+        value -= 1 << bits
+    return value
+
+
+def _int_width(target: PortType) -> tuple[int, bool]:
+    signed = target.lo is not None and target.lo < 0
+    span = (target.hi or 0) - (target.lo or 0)
+    return (32 if span <= UINT32_MAX else 64), signed
+
+
+def casting_safe(value: Any, target: PortType) -> bool:
+    """BT.CPP ``isCastingSafe(target, value)``: may a number of another type be written into an
+    entry declared ``target`` (``Blackboard::set``)? Its ``ValidCast`` quirks are kept: the
+    target's limits are first cast to the *source* type, so a C++ ``int`` (a Python int that
+    fits 32 bits) is never accepted by an unsigned entry, and ``false`` is refused by a signed
+    integer entry."""
+    kind = target.kind
+    if isinstance(value, bool):
+        src_bits, src_signed = 1, False
+    elif isinstance(value, int):
+        src_bits, src_signed = (32, True) if INT32_MIN <= value <= INT32_MAX else (64, True)
+    elif isinstance(value, float):
+        src_bits, src_signed = 0, True
+    else:
+        return False
+    if kind == "double":
+        if target.name == "float" and isinstance(value, float):
+            return struct.unpack("f", struct.pack("f", value))[0] == value if math.isfinite(value) else True
+        return isinstance(value, float) or float(value) == value
+    if kind != "int" or target.lo is None or target.hi is None:
+        return False  # bool, string, enum, status... entries take no other type
+    bits, signed = _int_width(target)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return False
+        over = value >= float(target.hi) if bits > 53 else value > float(target.hi)
+        if over or value < float(target.lo):
+            return False
+        return float(int(value)) == value
+    if src_bits == 1:  # bool: both limits become bool
+        max_limit, low_limit = bool(target.hi), bool(target.lo)
+        return not (value > max_limit or value < low_limit)
+    max_limit = _wrap(target.hi, src_bits, src_signed)
+    low_limit = _wrap(target.lo, src_bits, src_signed)
+    if value > max_limit or value < low_limit:
+        return False
+    return _wrap(_wrap(value, bits, signed), src_bits, src_signed) == value
+
+
 def convert_exact(value: Any, target: PortType) -> tuple[bool, Any]:
     """Blackboard.set's numeric acceptance rule: does ``value`` convert *exactly* to target?
 
@@ -432,6 +500,10 @@ def convert_exact(value: Any, target: PortType) -> tuple[bool, Any]:
     if kind == "bool":
         if isinstance(value, bool):
             return True, value
+        return False, None
+    if value is False and kind == "int" and target.lo is not None and target.lo < 0:
+        # BT.CPP's isCastingSafe<bool> into a signed integer compares false < bool(INT_MIN),
+        # which is true, so writing `false` into an int entry is refused (`true` is accepted).
         return False, None
     if isinstance(value, (bool, int, float)) and kind in ("int", "double"):
         try:

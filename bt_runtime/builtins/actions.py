@@ -128,6 +128,10 @@ class SetBlackboardNode(SyncActionNode):
             if dst.type.kind == "any":
                 raise LogicError(f"Can't convert string [{out}] to type [BT::Any]: You didn't implement "
                                  "the template specialization of convertFromString for this type: BT::Any")
+            if not dst.type.has_converter:
+                # e.g. a NodeStatus entry: BT.CPP's parseString gives an empty value, which set() refuses
+                raise LogicError(f"Blackboard::set({output_key}): once declared, the type of a port shall not "
+                                 f"change. Previously declared type [{dst.type.name}], current type [BT::Any]")
             try:
                 out = dst.type.from_string(out, cfg.enums)
             except Exception as exc:

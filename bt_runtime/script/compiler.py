@@ -106,15 +106,15 @@ def _binary(op: str, lf: Fn, rf: Fn, right: Node) -> Fn:
         def logic_and(bb, enums):
             x = lf(bb, enums)
             y = rf(bb, enums)  # no short-circuit: both sides always run
-            if type(x) is float and type(y) is float:
+            if type(x) is float and type(y) is float and x >= 0.0 and y >= 0.0:
                 return 1.0 if (x != 0.0 and y != 0.0) else 0.0
-            return binary(op, x, y)
+            return binary(op, x, y)  # also the error for a negative (not castable to bool) side
         return logic_and
     if op == "||":
         def logic_or(bb, enums):
             x = lf(bb, enums)
             y = rf(bb, enums)
-            if type(x) is float and type(y) is float:
+            if type(x) is float and type(y) is float and x >= 0.0 and y >= 0.0:
                 return 1.0 if (x != 0.0 or y != 0.0) else 0.0
             return binary(op, x, y)
         return logic_or
@@ -282,9 +282,9 @@ class Script:
             raise
         except BTRuntimeError as exc:
             raise ScriptRuntimeError(f"Error in script [{self.text}]\n{exc}") from exc
-        if type(value) is float:
+        if type(value) is float and value >= 0.0:
             return value != 0.0
-        return to_bool(value)
+        return to_bool(value)  # negative numbers do not convert to bool
 
     def __repr__(self) -> str:
         return f"Script({self.text!r})"

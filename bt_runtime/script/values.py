@@ -112,6 +112,9 @@ def to_int64(value: Any) -> int:
     return value
 
 
+NEGATIVE_TO_UNSIGNED = "Value is negative and can't be converted to unsigned"
+
+
 def to_uint64(value: Any) -> int:
     """``Any::cast<uint64_t>`` of a number."""
     if value < 0:
@@ -124,13 +127,18 @@ def to_uint64(value: Any) -> int:
 
 
 def cast_bool(value: Any) -> bool:
-    """``Any::cast<bool>``: double != 0; an integer must be 0 or 1; nothing else converts."""
+    """``Any::cast<bool>``: double != 0; an integer must be 0 or 1; nothing else converts.
+    bool is unsigned for BT.CPP's convertNumber, so any negative number is rejected first."""
     t = type(value)
     if t is float:
+        if value < 0.0:
+            raise CastError(NEGATIVE_TO_UNSIGNED)
         return value != 0.0
     if t is int:
         if value == 0 or value == 1:
             return value == 1
+        if value < 0:
+            raise CastError(NEGATIVE_TO_UNSIGNED)
         raise CastError("Implicit casting to bool is not allowed")
     value = normalize(value)
     if value is EMPTY:
@@ -185,6 +193,4 @@ def string_to_double(text: str, enums: dict[str, int] | None) -> float:
 
 def to_bool(value: Any) -> bool:
     """A script result as a condition (spec 6.5): ScriptCondition, pre-conditions, Precondition."""
-    if type(value) is float:
-        return value != 0.0
     return cast_bool(value)

@@ -41,12 +41,34 @@ class XMLDocument:
     _line_starts: list[int] = field(default_factory=list)  # processed line numbers of fixed tags
     _line_removed: list[int] = field(default_factory=list)  # cumulative newlines removed by then
 
+    _line_offsets: list[int] = field(default_factory=list, repr=False)  # start of each original line
+
     def line_of(self, element: etree._Element) -> int | None:
-        """The element's line in the original text."""
+        """The line in the original text where the element's start tag begins."""
         line = element.sourceline
         if line is None:
             return None
-        return self.original_line(line)
+        return self._tag_start_line(element.tag, self.original_line(line))
+
+    def _tag_start_line(self, tag: object, end_line: int) -> int:
+        """libxml2 numbers an element by the line where its start tag *ends*; walk back to the
+        line of its ``<tag`` (tinyxml2 and people count from there)."""
+        if not isinstance(tag, str):
+            return end_line
+        offsets = self._line_offsets
+        if not offsets:
+            offsets.append(0)
+            offsets.extend(m.end() for m in re.finditer("\n", self.text))
+        if end_line > len(offsets):
+            return end_line
+        end = offsets[end_line] if end_line < len(offsets) else len(self.text)
+        pos = self.text.rfind("<" + tag, 0, end)  # usually found on that very line
+        while pos >= 0:
+            after = self.text[pos + 1 + len(tag):pos + 2 + len(tag)]
+            if after == "" or after.isspace() or after in "/>":
+                return bisect.bisect_right(offsets, pos)
+            pos = self.text.rfind("<" + tag, 0, pos)
+        return end_line
 
     def original_line(self, processed_line: int) -> int:
         idx = bisect.bisect_left(self._line_starts, processed_line) - 1
@@ -126,7 +148,11 @@ def parse_xml_text(text: str | bytes, file: str | None = None) -> XMLDocument:
     if isinstance(text, bytes):
         if len(text) > MAX_XML_BYTES:
             raise XMLLoadError(f"XML too large ({len(text)} bytes, limit {MAX_XML_BYTES}); refused", file=file)
-        text = text.decode("utf-8-sig")
+        try:
+            text = text.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise XMLLoadError(f"The XML is not valid UTF-8 ({exc.reason} at byte {exc.start})",
+                               file=file) from None
     if len(text) > MAX_XML_BYTES:
         raise XMLLoadError(f"XML too large ({len(text)} characters, limit {MAX_XML_BYTES}); refused",
                            file=file)

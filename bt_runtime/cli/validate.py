@@ -1,0 +1,301 @@
+"""``validate FILE... [--models MODELS.xml ...] [--json]``: load and instantiate every tree.
+
+Each file gets a fresh factory (the builtins plus placeholder node types for every model of
+the ``--models`` files), its document is registered (with its ``<include>``s) and every
+``<BehaviorTree>`` the factory then knows is instantiated: node types, ports and literal
+conversions, subtree references and remappings, scripts. Every problem is reported as
+``file:line: <element>: message``; the exit code is 1 if there was any. Literals of enum-typed
+ports (``else="DONE"``), which BT.CPP only converts when they are read, are checked too.
+
+A load-time problem (unknown node, wrong child count, ...) stops BT.CPP at the first one in a
+document. To report the problems of the *other* trees of the same file too, the tree holding
+the problem is replaced by ``<AlwaysFailure/>`` (keeping its ID and every line number) and the
+document is loaded again, until it loads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import re
+import sys
+import warnings
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from ..errors import BehaviorTreeException, XMLLoadError
+from ..factory import BehaviorTreeFactory
+from ..ports import blackboard_key
+from ..xml.reader import element_children, parse_xml_text
+
+
+@dataclass(frozen=True)
+class Problem:
+    file: str
+    line: int | None
+    element: str | None
+    message: str
+
+    def __str__(self) -> str:
+        where = self.file + (f":{self.line}" if self.line else "")
+        elem = f" <{self.element}>:" if self.element else ""
+        return f"{where}:{elem} " + self.message.replace("\n", "\n    ")
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "validate", help="load and check tree files (nodes, ports, subtrees, scripts)",
+        description="Load every tree of each FILE and instantiate it; report every problem as "
+                    "file:line: <element>: message. Exit status 1 if any problem was found.")
+    parser.add_argument("files", nargs="+", metavar="FILE", help="BehaviorTree.CPP v4 (or v3) XML files")
+    parser.add_argument("--models", action="append", default=[], metavar="MODELS.xml",
+                        help="a <TreeNodesModel> file: its node types are registered as placeholders "
+                             "(ports checked, not runnable). May be repeated.")
+    parser.add_argument("--json", action="store_true",
+                        help="print a JSON list of {file, line, element, message}")
+    parser.set_defaults(func=run)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    problems: list[Problem] = []
+    seen: set[Problem] = set()
+    summaries: list[str] = []
+
+    def report(problem: Problem) -> None:
+        if problem not in seen:
+            seen.add(problem)
+            problems.append(problem)
+
+    with _warnings_to_stderr():
+        models = _read_models(args.models, report)
+    if models is not None:
+        for file in args.files:
+            before = len(problems)
+            with _warnings_to_stderr():
+                checked = validate_file(file, models, report)
+            found = len(problems) - before
+            summaries.append(f"{file}: {checked} tree(s) checked, "
+                             + ("OK" if not found else f"{found} problem(s)"))
+
+    file_order = {f: i for i, f in enumerate(dict.fromkeys(p.file for p in problems))}
+    problems.sort(key=lambda p: (file_order[p.file], p.line or 0))
+    if args.json:
+        print(json.dumps([asdict(p) for p in problems], indent=2))
+    else:
+        for problem in problems:
+            print(problem)
+        for line in summaries:
+            print(line, file=sys.stderr)
+    return 1 if problems else 0
+
+
+@contextlib.contextmanager
+def _warnings_to_stderr() -> Iterator[None]:
+    """Print each distinct warning (e.g. a v3 file being translated) once, to stderr."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield
+    for message in dict.fromkeys(str(w.message) for w in caught):
+        print(f"warning: {message}", file=sys.stderr)
+
+
+# -- checking one file -------------------------------------------------------------------------
+
+def _problem(exc: BaseException, file: str) -> Problem:
+    if isinstance(exc, XMLLoadError):
+        return Problem(str(exc.file or file), exc.line, exc.element, exc.message)
+    return Problem(file, None, None, f"{type(exc).__name__}: {exc}" if not isinstance(
+        exc, BehaviorTreeException) else str(exc))
+
+
+def _read_models(paths: list[str], report) -> list[tuple[str, str]] | None:
+    """Read and check every models file once; None (after reporting) if one is unusable."""
+    models = []
+    for path in paths:
+        try:
+            text = Path(path).read_text(encoding="utf-8-sig")
+            BehaviorTreeFactory().register_models_from_text(text, file=path)
+        except OSError as exc:
+            report(Problem(path, None, None, f"cannot read the models file: {exc.strerror or exc}"))
+            return None
+        except (BehaviorTreeException, UnicodeDecodeError) as exc:
+            report(_problem(exc, path))
+            return None
+        models.append((path, text))
+    return models
+
+
+def _factory(models: list[tuple[str, str]]) -> BehaviorTreeFactory:
+    factory = BehaviorTreeFactory()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # already reported by _read_models
+        for path, text in models:
+            factory.register_models_from_text(text, file=path)
+    return factory
+
+
+def validate_file(file: str, models: list[tuple[str, str]], report) -> int:
+    """Check one file; report its problems; return how many trees were checked."""
+    path = Path(file)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        report(Problem(file, None, None, f"cannot read the file: {exc.strerror or exc}"))
+        return 0
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        report(Problem(file, None, None, f"the file is not valid UTF-8 ({exc.reason} at byte {exc.start})"))
+        return 0
+
+    neutralized: set[str] = set()
+    attempts = 0
+    while True:
+        factory = _factory(models)
+        try:
+            factory.registry.load_text(text, file=file)
+            break
+        except BehaviorTreeException as exc:
+            problem = _problem(exc, file)
+            report(problem)
+            attempts += 1
+            replaced = None
+            if problem.file == file and problem.line and attempts <= 256:
+                replaced = _neutralize(text, file, problem)
+            if replaced is None:
+                return 0
+            text, ids = replaced
+            neutralized |= ids
+
+    checked = 0
+    for tree_id in factory.registered_behavior_trees():
+        if tree_id in neutralized:
+            continue
+        checked += 1
+        try:
+            tree = factory.create_tree(tree_id)
+        except Exception as exc:  # noqa: BLE001 - every failure is a problem to report
+            report(_problem(exc, file))
+            continue
+        for problem in _literal_problems(tree, file):
+            report(problem)
+    return checked
+
+
+def _literal_problems(tree: Any, file: str) -> list[Problem]:
+    """Literals of enum-typed ports (NodeStatus included): BT.CPP only converts them when the
+    node reads them, so a bad one loads and fails at run time. Report them now."""
+    problems = []
+    for node in tree.nodes():
+        manifest = node.config.manifest
+        if manifest is None:
+            continue
+        for name, raw in node.config.input_ports.items():
+            port = manifest.ports.get(name)
+            if port is None or port.type.kind not in ("status", "enum") or not isinstance(raw, str):
+                continue
+            if blackboard_key(raw, name) is not None:
+                continue
+            try:
+                port.type.from_string(raw, node.config.enums)
+            except BehaviorTreeException:
+                src_file, line = node.config.source
+                problems.append(Problem(str(src_file or file), line, node.registration_name,
+                                        f'The port with name "{name}" and value "{raw}" can not be converted '
+                                        f"to {port.type.name}"))
+    return problems
+
+
+# -- replacing a tree that failed to load --------------------------------------------------------
+
+_BT_OPEN = re.compile(r"<BehaviorTree\b")
+_BT_CLOSE = re.compile(r"</BehaviorTree\s*>")
+_COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
+_PLACEHOLDER = "<AlwaysFailure/>"
+
+
+def _start_tag_end(text: str, pos: int) -> int | None:
+    """Index just past the '>' closing the start tag that begins at ``pos`` (quotes respected)."""
+    quote = None
+    for i in range(pos, len(text)):
+        ch = text[i]
+        if quote:
+            if ch == quote:
+                quote = None
+        elif ch in "\"'":
+            quote = ch
+        elif ch == ">":
+            return i + 1
+    return None
+
+
+def _blank(fragment: str) -> str:
+    return "\n" * fragment.count("\n")
+
+
+def _tree_spans(text: str, file: str) -> list[tuple[Any, int, int, int | None]] | None:
+    """(element, begin, start-tag end, end-tag start or None if self-closing) for each tree."""
+    try:
+        doc = parse_xml_text(text, file=file)
+    except BehaviorTreeException:
+        return None
+    comments = [m.span() for m in _COMMENT.finditer(text)]
+    opens = [m.start() for m in _BT_OPEN.finditer(text)
+             if not any(a <= m.start() < b for a, b in comments)]
+    elements = list(doc.root.iter("BehaviorTree"))
+    if len(opens) != len(elements):
+        return None
+    top = set(element_children(doc.root))
+    spans = []
+    for element, begin in zip(elements, opens):
+        tag_end = _start_tag_end(text, begin)
+        if tag_end is None:
+            return None
+        if text[tag_end - 2] == "/":
+            close = None
+        else:
+            m = _BT_CLOSE.search(text, tag_end)
+            if m is None:
+                return None
+            close = m.start()
+        if element in top:
+            spans.append((element, begin, tag_end, close))
+    return spans
+
+
+def _neutralize(text: str, file: str, problem: Problem) -> tuple[str, set[str]] | None:
+    """Replace the <BehaviorTree>(s) whose lines hold the problem: their content by a
+    placeholder (the ID stays registered, so trees using it still build), or the whole element
+    by blank lines when the element itself is wrong or already holds only the placeholder.
+    Line numbers are kept. Returns the new text and the IDs replaced by a placeholder, or None
+    when the problem is not inside a tree."""
+    spans = _tree_spans(text, file)
+    if not spans:
+        return None
+    edits = []
+    for element, begin, tag_end, close in spans:
+        end = tag_end if close is None else text.index(">", close) + 1
+        first = text.count("\n", 0, begin) + 1
+        last = first + text.count("\n", begin, end)
+        if first <= (problem.line or 0) <= last:
+            edits.append((element, begin, tag_end, close, end))
+    if not edits:
+        return None
+    replaced: set[str] = set()
+    for element, begin, tag_end, close, end in reversed(edits):
+        already = close is not None and text[tag_end:close].strip() == _PLACEHOLDER
+        if problem.element == "BehaviorTree" or already:
+            text = text[:begin] + _blank(text[begin:end]) + text[end:]
+            continue
+        tree_id = element.get("ID")
+        if tree_id:
+            replaced.add(tree_id)
+        if close is None:
+            text = text[:begin] + text[begin:tag_end - 2] + ">" + _PLACEHOLDER + "</BehaviorTree>" + text[tag_end:]
+        else:
+            text = text[:tag_end] + _PLACEHOLDER + _blank(text[tag_end:close]) + text[close:]
+    return text, replaced
