@@ -304,14 +304,21 @@ def embed_models_text(text: str, factory: BehaviorTreeFactory, include_builtin: 
     if base is None:
         base = "    "
     unit = base if base else "    "
+    # Entries keep the indentation the existing section already uses.
+    entry_indent = base + unit
+    if layout.entries:
+        first = _line_indent(text, layout.entries[0].start)
+        if first is not None and first.startswith(base) and len(first) > len(base):
+            entry_indent = first
+            unit = first[len(base):]
 
     pieces: list[tuple[bytes, str]] = []
     for rid in generated_ids:
         lines = render(model_element(manifests[rid])).rstrip("\n").split("\n")
-        body = newline.join(base + unit + _reindent(line, unit) for line in lines)
+        body = newline.join(entry_indent + _reindent(line, unit) for line in lines)
         pieces.append((rid.encode("utf-8"), body))
     for entry in kept:
-        pieces.append((entry.model_id.encode("utf-8"), base + unit + text[entry.start:entry.end]))
+        pieces.append((entry.model_id.encode("utf-8"), entry_indent + text[entry.start:entry.end]))
     pieces.sort(key=lambda p: p[0])
 
     if pieces:
