@@ -547,3 +547,25 @@ def test_protocol_helpers() -> None:
     assert P.msgpack_encode({"b": [1, -1, -33, 300], "a": None}) == msgpack.packb({"a": None, "b": [1, -1, -33, 300]})
     assert P.msgpack_encode(float("inf"))[:1] == b"\xcb" and P.msgpack_encode(1e300)[:1] == b"\xcb"
     assert struct.unpack(">f", P.msgpack_encode(0.5)[1:])[0] == 0.5
+
+
+async def test_cli_wiring(tmp_path) -> None:
+    import argparse
+
+    from groot.btlog import read_btlog
+    from groot.cli import Monitoring, add_arguments
+
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    assert parser.parse_args([]).groot is None
+    assert parser.parse_args(["--groot"]).groot == 1667
+    args = parser.parse_args(["--groot", "0", "--btlog", str(tmp_path / "r.btlog"), "--groot-status", "exact"])
+    tree, _ = build()
+    tree.set_clock(asyncio.get_running_loop().time)
+    async with Monitoring.from_args(tree, args) as monitoring:
+        assert monitoring.server.tracker.mode == "exact" and monitoring.server.host == "127.0.0.1"
+        for _ in range(3):
+            tree.tick_once()
+        with GrootClient(monitoring.server.port) as client:
+            assert len(await call(client.status)) == sum(len(r.nodes) for r in tree.subtrees)
+    assert monitoring.server is None and len(read_btlog(tmp_path / "r.btlog")[2]) > 10
