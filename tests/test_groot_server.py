@@ -508,6 +508,7 @@ async def test_groot2_probe_hooks_strict_passes() -> None:
     report = json.loads(out)
     assert rc == 0 and report["passed"], (report["required_failed"], report["advisory_failed"], err[-500:])
     assert report["required_total"] >= 40 and report["advisory_total"] >= 18
+    print("probe checks:", report["required_total"], "required,", report["advisory_total"], "advisory")
 
 
 def btview_available() -> bool:
