@@ -16,6 +16,10 @@ Run: python bench/tick.py [--repeat N]
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repo, ahead of bench/ (bench/sim.py)
 import statistics
 import time
 

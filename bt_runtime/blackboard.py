@@ -131,27 +131,34 @@ class Blackboard:
         return entry
 
     # -- writing -------------------------------------------------------------------------------
-    def set(self, key: str, value: Any) -> None:
-        """Write with BT.CPP's rules (spec 8.4): first typed write locks the entry's type."""
+    def set(self, key: str, value: Any, value_type: PortType | None = None) -> None:
+        """Write with BT.CPP's rules (spec 8.4): first typed write locks the entry's type.
+
+        ``value_type`` is the value's static type when the writer knows it (an output port's
+        declared type, as C++'s ``setOutput<T>``); otherwise it is inferred from the value.
+        """
         if key[:1] == "@":
-            self.root().set(key[1:], value)
+            self.root().set(key[1:], value, value_type)
             return
         entry = self._storage.get(key)
         if entry is None:
             # Not local: create through remapping/autoremap rules (may land in a parent); an
             # existing entry found that way is type-checked strictly and written as is.
-            new_type = ANYTYPE if isinstance(value, str) else type_of_value(value)
+            if isinstance(value, str) and (value_type is None or value_type.kind == "string"):
+                new_type = ANYTYPE
+            else:
+                new_type = value_type or type_of_value(value)
             self.create_entry(key, new_type).write(value)
             return
-        self._write_local(key, entry, value)
+        self._write_local(key, entry, value, value_type)
 
-    def _write_local(self, key: str, entry: Entry, value: Any) -> None:
+    def _write_local(self, key: str, entry: Entry, value: Any, static_type: PortType | None = None) -> None:
         declared = entry.type
         if not declared.strongly_typed:
-            entry.type = type_of_value(value)
+            entry.type = static_type or type_of_value(value)
             entry.write(value)
             return
-        value_type = type_of_value(value)
+        value_type = static_type or type_of_value(value)
         if value_type == declared:
             entry.write(value)
             return

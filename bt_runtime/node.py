@@ -417,7 +417,18 @@ class TreeNode:
         key = blackboard_key(raw, name)
         if key is None:
             raise LogicError("setOutput requires a blackboard pointer. Use {}")
-        cfg.blackboard.set(key, value)
+        port = cfg.manifest.ports.get(name) if cfg.manifest is not None else None
+        ptype = port.type if port is not None else None
+        if ptype is None or not ptype.strongly_typed or ptype.kind == "string":
+            cfg.blackboard.set(key, value)
+            return
+        # The port's declared type is the value's static type (C++ setOutput<T>); check it.
+        py_type = ptype.py_type
+        if py_type is not None and not isinstance(value, py_type) and not (
+                ptype.kind in ("int", "double") and isinstance(value, (int, float))):
+            raise LogicError(f"setOutput() of node '{cfg.path}': port [{name}] is declared "
+                             f"[{ptype.name}] but got a value of type [{type(value).__name__}]")
+        cfg.blackboard.set(key, value, ptype)
 
     def get_raw_port_value(self, name: str) -> str | None:
         raw = self.config.input_ports.get(name)

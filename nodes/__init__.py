@@ -1,0 +1,36 @@
+"""The robot behaviour library: health, collision, battery, path and goal nodes, plus the
+Nav2-named nodes (``nodes.nav2``) so Nav2's own trees load.
+
+``register_all(factory)`` registers everything; the CLI calls it for every tree it runs.
+"""
+
+from __future__ import annotations
+
+from bt_runtime import BehaviorTreeFactory
+
+from . import battery, collision, goals, health, path
+
+AUTONOMY_NODES = [
+    health.ComponentHealthy, health.ComponentsHealthy, health.AnyComponentDead, health.RequestRestarts,
+    health.RestartComponent, health.WaitForHealthy, health.SetSpeedLimit, health.RestoreSpeedLimit,
+    health.EmergencyStop, health.ReleaseEmergencyStop, health.IsSafeToContinue,
+    collision.CollisionDetected, collision.InContact, collision.EstimateContactPoint, collision.ReverseOut,
+    collision.StopRobot, collision.ReleaseRobot, collision.MarkObstacle, collision.ClearCostmaps,
+    battery.BatteryCanReach, battery.BatteryAbove, battery.RefuseGoal,
+    path.RatePathQuality, path.FindAlternativeGoal,
+    goals.GoalPending, goals.SetGoalStatus,
+]
+
+
+def register_autonomy_nodes(factory: BehaviorTreeFactory) -> None:
+    for cls in AUTONOMY_NODES:
+        factory.register_node_type(cls)
+
+
+def register_all(factory: BehaviorTreeFactory) -> None:
+    register_autonomy_nodes(factory)
+    try:
+        from .nav2 import register_nav2_nodes
+    except ImportError:
+        return
+    register_nav2_nodes(factory)

@@ -206,9 +206,10 @@ class OdomDriver(Driver):
 
 # ---------------------------------------------------------------------------------------------
 class BumperDriver(Driver):
-    """Contact events: published at once when the contact state changes, and at the bumper
-    rate while in contact. The state is set by the simulator from pymunk's collision handler
-    (and from the push fault)."""
+    """Contact state: published at once when it changes, and at the bumper rate all the time
+    (like TurtleBot3's sensor_state topic), so a watchdog can tell a silent driver from "no
+    contact". The state is set by the simulator from pymunk's collision handler (and from the
+    push fault)."""
 
     def __init__(self, sim: Simulator, **kw) -> None:
         super().__init__(sim, "bumper", "bumper", sim.profile.bumper_rate_hz, **kw)
@@ -234,7 +235,7 @@ class BumperDriver(Driver):
     def sample(self, now: float) -> Contact | None:
         c = self.current
         if not c.in_contact:
-            return None
+            return Contact(now, False)
         return Contact(now, True, c.direction, c.point, c.impulse)
 
     def corrupt(self, msg: Contact, mode: str) -> Contact:

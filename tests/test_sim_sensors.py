@@ -52,7 +52,7 @@ def test_rates_and_stamps():
     sim = Simulator(open_world(), "burger", seed=0)
     rec = run_sim(sim, lambda s: asyncio.sleep(2.0 + 1e-6))
     counts = {t: len(rec[t]) for t in TOPICS}
-    assert counts == {"scan": 10, "imu": 100, "odom": 100, "pose": 20, "battery": 2, "bumper": 0,
+    assert counts == {"scan": 10, "imu": 100, "odom": 100, "pose": 20, "battery": 2, "bumper": 20,
                       "ground_truth": 21, "cmd_vel_out": 0}
     assert np.allclose(np.diff(rec.stamps("scan")), 0.2)
     assert np.allclose(np.diff(rec.stamps("imu")), 0.02)

@@ -106,3 +106,6 @@ class RobotDriver(Protocol):
 
     async def restart(self, name: str) -> bool:
         """Restart a component; True once it is running again, False if the restart failed."""
+
+    # Optional: ``robot_info() -> RobotInfo`` (footprint, speed limits, power model). The
+    # runtime puts it on the context as ``context.robot``; defaults are used if absent.

@@ -221,3 +221,29 @@ class ComponentInfo:
     expected_rate_hz: float = 0.0
     state: ComponentState = ComponentState.UNKNOWN
     extra: dict = field(default_factory=dict)
+
+
+@dataclass(slots=True, frozen=True)
+class RobotInfo:
+    """What the autonomy layer may know about the robot (from the driver's configuration).
+
+    The power model is the paper's: P = idle + k_linear * |v| + k_angular * |w| (W), and the
+    state of charge drops by P / V * dt / 3600 / capacity_ah * 100 percent.
+    """
+
+    radius: float = 0.105
+    max_linear: float = 0.22
+    max_angular: float = 2.84
+    capacity_ah: float = 1.8
+    voltage_nominal: float = 11.1
+    idle_power_w: float = 6.0
+    k_linear: float = 12.0  # W per m/s
+    k_angular: float = 1.0  # W per rad/s
+
+    def power(self, linear: float, angular: float = 0.0) -> float:
+        return self.idle_power_w + self.k_linear * abs(linear) + self.k_angular * abs(angular)
+
+    def percent_for(self, energy_wh: float, voltage: float | None = None) -> float:
+        """State-of-charge percentage that ``energy_wh`` costs at ``voltage``."""
+        volts = voltage or self.voltage_nominal
+        return energy_wh / volts / self.capacity_ah * 100.0

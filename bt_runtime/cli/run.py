@@ -1,0 +1,280 @@
+"""``python -m bt_runtime run TREE.xml``: run a tree with the autonomy layer on a robot.
+
+Defaults to the built-in simulator in the apartment, on virtual time (as fast as the CPU
+allows); ``--realtime`` paces it to the wall clock. Shows a live progress line (on a
+terminal) and a summary at the end; structlog events go to ``--log-file`` or, with
+``--log-json``, to stdout as JSON lines.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import importlib
+import json
+import math
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from ..errors import BehaviorTreeException
+from ..runtime.messages import Pose2D
+
+EXIT_OK, EXIT_TREE_FAILED, EXIT_USAGE = 0, 1, 2
+
+
+class UsageError(Exception):
+    """A bad command line or input file, reported without a traceback."""
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = subparsers.add_parser("run", help="run a tree with the autonomy layer (simulator by default)",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("tree", help="BehaviorTree.CPP v4 XML file")
+    p.add_argument("--world", default="apartment", help="apartment | round_obstacles | a world YAML file")
+    p.add_argument("--robot", default="burger", help="burger | waffle | rosbot2 | a profile YAML file")
+    p.add_argument("--goal", action="append", default=[], metavar="X,Y[,YAW]",
+                   help="goal pose (repeatable) or a goal name of the world; sets {goal} and {goals}")
+    p.add_argument("--duration", type=float, default=None, metavar="S",
+                   help="stop after S seconds of robot time (default: when the tree completes)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--realtime", action="store_true", help="pace the simulation to the wall clock")
+    p.add_argument("--driver", default="sim", choices=["sim", "ros2"])
+    p.add_argument("--config", type=Path, default=None, help="runtime configuration (YAML)")
+    p.add_argument("--register", action="append", default=[], metavar="MODULE:FUNC",
+                   help="extra node registration function called with the factory (repeatable)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="set a root blackboard entry before the first tick (repeatable)")
+    p.add_argument("--log-json", action="store_true", help="structlog events as JSON lines on stdout")
+    p.add_argument("--log-file", type=Path, default=None, help="structlog events (JSON lines) to this file")
+    p.add_argument("--log-level", default="info", choices=["debug", "info", "warning", "error"])
+    p.add_argument("--no-progress", action="store_true", help="no live progress line")
+    p.add_argument("--summary-json", type=Path, default=None, help="write the run summary as JSON")
+    return p
+
+
+# ---------------------------------------------------------------------------------------------
+# argument checking (clear errors, no tracebacks)
+# ---------------------------------------------------------------------------------------------
+
+def parse_goal(text: str, world: Any = None) -> Pose2D:
+    parts = [p.strip() for p in text.replace(";", ",").split(",") if p.strip()]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) in (2, 3) and all(math.isfinite(v) for v in values):
+        return Pose2D(*values)
+    if world is not None and len(parts) == 1:
+        try:
+            g = world.goal(parts[0])
+            return Pose2D(g.x, g.y, getattr(g, "yaw", 0.0))
+        except Exception:
+            names = ", ".join(sorted(getattr(world, "goals", {}) or {}))
+            raise UsageError(f"--goal {text!r}: not X,Y[,YAW] and not a goal of this world "
+                             f"(goals: {names or 'none'})") from None
+    raise UsageError(f"--goal expects X,Y[,YAW] (numbers), got {text!r}")
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    if "=" not in text:
+        raise UsageError(f"--set expects KEY=VALUE, got {text!r}")
+    key, value = text.split("=", 1)
+    for cast in (int, float):
+        try:
+            return key.strip(), cast(value)
+        except ValueError:
+            pass
+    return key.strip(), value
+
+
+def load_registrations(specs: list[str]) -> list[Callable[[Any], Any]]:
+    registrations = []
+    try:
+        nodes = importlib.import_module("nodes")
+        if hasattr(nodes, "register_all"):
+            registrations.append(nodes.register_all)
+    except ImportError:
+        pass
+    for spec in specs:
+        module_name, _, func_name = spec.partition(":")
+        try:
+            module = importlib.import_module(module_name)
+            registrations.append(getattr(module, func_name or "register_all"))
+        except (ImportError, AttributeError) as exc:
+            raise UsageError(f"--register {spec!r}: {exc}") from None
+    return registrations
+
+
+def load_config(path: Path | None):
+    from pydantic import ValidationError
+
+    from ..runtime.config import RuntimeConfig
+
+    if path is None:
+        return RuntimeConfig()
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+        return RuntimeConfig.model_validate(data)
+    except FileNotFoundError:
+        raise UsageError(f"config file not found: {path}") from None
+    except (yaml.YAMLError, ValidationError) as exc:
+        raise UsageError(f"{path}: {exc}") from None
+
+
+def make_driver(args: argparse.Namespace):
+    if args.driver == "ros2":
+        try:
+            from ..runtime.ros2 import Ros2Driver  # provided by the [ros2] extra
+        except ImportError as exc:
+            raise UsageError(f"--driver ros2 is not available: {exc}") from None
+        return Ros2Driver.from_args(args)
+    from sim.driver import SimDriver
+
+    try:
+        return SimDriver(args.world, args.robot, seed=args.seed)
+    except (FileNotFoundError, KeyError, ValueError) as exc:
+        raise UsageError(f"cannot build the simulator: {exc}") from None
+
+
+# ---------------------------------------------------------------------------------------------
+# the run
+# ---------------------------------------------------------------------------------------------
+
+class ProgressLine:
+    """One status line, refreshed at most every ``interval`` wall seconds."""
+
+    def __init__(self, runtime: Any, stream=sys.stderr, interval: float = 0.25):
+        self.runtime = runtime
+        self.stream = stream
+        self.interval = interval
+        self._last = 0.0
+        self._wall0 = time.perf_counter()
+        self._sim0 = runtime.clock()
+        self.printed = False
+
+    def line(self) -> str:
+        rt = self.runtime
+        sim_t = rt.clock() - self._sim0
+        wall = time.perf_counter() - self._wall0
+        rtf = sim_t / wall if wall > 0 else 0.0
+        pose = rt.backup.latest("pose")
+        pose_txt = (f"({pose.pose.x:+.2f}, {pose.pose.y:+.2f}, {math.degrees(pose.pose.yaw):+4.0f}deg)"
+                    if pose is not None else "(no pose)")
+        bad = rt.supervisor.unhealthy()
+        health = "OK" if not bad else "! " + ",".join(f"{n}:{rt.supervisor.health(n).value}" for n in bad)
+        status = rt.tick_loop.status.name if rt.tick_loop else "-"
+        return (f"t={sim_t:7.2f}s  x{rtf:6.1f}  pose={pose_txt}  tree={status:<8} gate={rt.gate.source:<7} "
+                f"health={health}")
+
+    def maybe_print(self) -> None:
+        now = time.perf_counter()
+        if now - self._last < self.interval:
+            return
+        self._last = now
+        self.stream.write("\r" + self.line()[:160].ljust(160))
+        self.stream.flush()
+        self.printed = True
+
+    async def run(self) -> None:
+        while True:
+            await asyncio.sleep(0.05)  # loop time: cheap when idle, frequent enough in real time
+            self.maybe_print()
+
+    def finish(self) -> None:
+        if self.printed:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def format_summary(summary: Any, runtime: Any) -> str:
+    s = summary
+    pose = runtime.backup.latest("pose")
+    lines = [
+        f"tree: {s.status} ({'completed' if s.completed else 'not completed'})",
+        f"time: {s.sim_time:.2f} s robot time in {s.wall_time:.2f} s wall (x{s.real_time_factor:.1f})",
+        f"ticks: {s.ticks}  errors: {s.tick_errors}  overruns: {s.overruns}  "
+        f"tick cost mean {s.tick_cost_mean_ms * 1e3:.1f} us, p99 {s.tick_cost_p99_ms * 1e3:.1f} us  "
+        f"lateness p50 {s.lateness_p50_ms * 1e3:.1f} us, p99 {s.lateness_p99_ms * 1e3:.1f} us",
+        "health: " + ", ".join(f"{k}={v}" for k, v in s.health.items()),
+        f"supervisor events: {s.supervisor_events}  gate switches: {s.gate_switches}"
+        + (f"  e-stop: {', '.join(s.estop_reasons)}" if s.estop_reasons else ""),
+    ]
+    if pose is not None:
+        lines.append(f"final pose: x={pose.pose.x:.2f} y={pose.pose.y:.2f} yaw={math.degrees(pose.pose.yaw):.0f}deg")
+    return "\n".join(lines)
+
+
+async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any,
+                     registrations: list, show_progress: bool) -> tuple[Any, int]:
+    from ..runtime.app import AutonomyRuntime
+
+    driver = make_driver(args)
+    runtime = AutonomyRuntime(driver, config, realtime=args.realtime or None, register=registrations)
+    try:
+        runtime.load_tree(tree_path)
+    except BehaviorTreeException as exc:
+        raise UsageError(str(exc)) from None
+    world = getattr(getattr(driver, "sim", None), "world", None)
+    goals = [parse_goal(g, world) for g in args.goal]
+    bb = runtime.tree.root_blackboard
+    if goals:
+        bb.set("goal", goals[0])
+        bb.set("goals", goals)
+    for assignment in args.set:
+        key, value = parse_assignment(assignment)
+        bb.set(key, value)
+    progress = ProgressLine(runtime) if show_progress else None
+    await runtime.start()
+    progress_task = asyncio.get_running_loop().create_task(progress.run()) if progress else None
+    try:
+        summary = await runtime.run(duration=args.duration)
+    finally:
+        if progress_task is not None:
+            progress_task.cancel()
+            progress.maybe_print()
+            progress.finish()
+        await runtime.stop()
+    code = EXIT_TREE_FAILED if summary.status == "FAILURE" else EXIT_OK
+    return (summary, runtime), code
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..logging_setup import configure_logging
+    from ..runtime.clock import run as run_loop
+
+    tree_path = Path(args.tree)
+    if not tree_path.is_file():
+        print(f"error: tree file not found: {tree_path}", file=sys.stderr)
+        return EXIT_USAGE
+    log_file = None
+    try:
+        if args.log_json:
+            configure_logging(json=True, stream=sys.stdout, level=args.log_level)
+        elif args.log_file is not None:
+            log_file = configure_logging(file=args.log_file, level=args.log_level)
+        else:
+            configure_logging(json=False, stream=sys.stderr, level="warning")
+        config = load_config(args.config)
+        registrations = load_registrations(args.register)
+        show_progress = not args.no_progress and not args.log_json and sys.stderr.isatty()
+        virtual = args.driver == "sim" and not args.realtime
+        (summary, runtime), code = run_loop(_run_async(args, tree_path, config, registrations, show_progress),
+                                            virtual=virtual)
+    except UsageError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    finally:
+        if log_file is not None:
+            log_file.close()
+    out = sys.stderr if args.log_json else sys.stdout
+    with contextlib.suppress(BrokenPipeError):
+        print(format_summary(summary, runtime), file=out)
+    if args.summary_json is not None:
+        args.summary_json.write_text(json.dumps(summary.__dict__, indent=2, default=str), encoding="utf-8")
+    return code

@@ -1,0 +1,264 @@
+"""The autonomy runtime: one event loop hosting the tree, supervisor, backup, gate and driver.
+
+    async def main():
+        runtime = AutonomyRuntime(SimDriver(...))       # inside the running loop
+        runtime.load_tree("trees/autonomy.xml")
+        runtime.tree.root_blackboard.set("goal", Pose2D(1, 0))
+        await runtime.start()
+        summary = await runtime.run(duration=60)
+        await runtime.stop()
+
+This is the paper's autonomy layer (Fig. 2/3) minus the behaviours, which are nodes.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import structlog
+
+from ..factory import BehaviorTreeFactory
+from ..status import FAILURE, SUCCESS, NodeStatus
+from ..tree import Tree
+from .backup import DataBackup
+from .clock import is_virtual
+from .config import RuntimeConfig
+from .context import RuntimeContext
+from .driver import RobotDriver
+from .gate import DecisionGate
+from .supervisor import SystemSupervisor
+from .tick_loop import TickLoop
+
+log = structlog.get_logger("bt_runtime.runtime")
+
+Registration = Callable[[BehaviorTreeFactory], Any]
+
+
+@dataclass
+class RunSummary:
+    """What a run did, for the CLI summary, tests and scenario judging."""
+
+    status: str  # the root's last status, or 'stopped'
+    completed: bool
+    sim_time: float
+    wall_time: float
+    ticks: int
+    tick_errors: int
+    overruns: int
+    tick_cost_mean_ms: float
+    tick_cost_p99_ms: float
+    lateness_p50_ms: float
+    lateness_p99_ms: float
+    health: dict[str, str] = field(default_factory=dict)
+    supervisor_events: int = 0
+    gate_switches: int = 0
+    estop_reasons: list[str] = field(default_factory=list)
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.sim_time / self.wall_time if self.wall_time > 0 else float("inf")
+
+
+class AutonomyRuntime:
+    """Builds and runs the autonomy layer around one tree on the current event loop."""
+
+    def __init__(self, driver: RobotDriver, config: RuntimeConfig | None = None, *,
+                 realtime: bool | None = None, register: Iterable[Registration] = ()):
+        self.loop = asyncio.get_running_loop()
+        self.driver = driver
+        self.config = config or RuntimeConfig()
+        self.realtime = (not is_virtual(self.loop)) if realtime is None else realtime
+        clock = self.loop.time
+        self.clock = clock
+        cfg = self.config
+        self.backup = DataBackup(driver, cfg.backup, clock=clock)
+        self.gate = DecisionGate(driver, cfg.gate, clock=clock, backup=self.backup)
+        self.supervisor = SystemSupervisor(driver, cfg.supervisor, clock=clock, gate=self.gate)
+        self.backup.supervisor = self.supervisor
+        self.context = RuntimeContext(driver, self.supervisor, self.backup, self.gate, cfg, clock)
+        robot_info = getattr(driver, "robot_info", None)
+        if callable(robot_info):
+            self.context.robot = robot_info()
+        self.factory = BehaviorTreeFactory(context=self.context)
+        for registration in register:
+            registration(self.factory)
+        self.tree: Tree | None = None
+        self.tick_loop: TickLoop | None = None
+        self.completed: asyncio.Future = self.loop.create_future()
+        self._tick_task: asyncio.Task | None = None
+        self._service_tasks: list[asyncio.Task] = []
+        self._started_wall = 0.0
+        self._started_sim = 0.0
+        self._grid_origin = 0.0
+        self._tick_origin = 0.0
+        self.running = False
+
+    # -- tree ----------------------------------------------------------------------------------
+    def load_tree(self, source: str | Path, *, tree_id: str | None = None) -> Tree:
+        """Load a tree from a file path or XML text (with the runtime's factory)."""
+        text = str(source)
+        if text.lstrip().startswith("<"):
+            tree = (self.factory.create_tree_from_text(text) if tree_id is None else
+                    self._register_and_create(text, tree_id))
+        else:
+            tree = (self.factory.create_tree_from_file(source) if tree_id is None else
+                    self._register_file_and_create(source, tree_id))
+        self.set_tree(tree)
+        return tree
+
+    def _register_and_create(self, text: str, tree_id: str) -> Tree:
+        self.factory.register_behavior_tree_from_text(text)
+        return self.factory.create_tree(tree_id)
+
+    def _register_file_and_create(self, path: str | Path, tree_id: str) -> Tree:
+        self.factory.register_behavior_tree_from_file(path)
+        return self.factory.create_tree(tree_id)
+
+    def set_tree(self, tree: Tree) -> None:
+        self.tree = tree
+        tree.set_clock(self.clock)
+        self.tick_loop = TickLoop(tree, self.config.tick, gate=self.gate, supervisor=self.supervisor,
+                                  realtime=self.realtime)
+        self.tick_loop.on_tick.append(self._on_tick)
+
+    def _on_tick(self, status: NodeStatus) -> None:
+        if (status is SUCCESS or status is FAILURE) and not self.completed.done():
+            self.completed.set_result(status)
+            if self.config.tick.stop_on_completion and "tree" in self.supervisor.components:
+                self.supervisor.set_watched("tree", False)  # an idle tree is not a dead tree
+
+    # -- lifecycle -----------------------------------------------------------------------------
+    async def start(self, *, tick: bool = True) -> None:
+        """Start the driver and the services; start ticking unless ``tick`` is False (then the
+        tree waits for ``restart_tree()``, as Nav2's navigator waits for a goal)."""
+        if self.tree is None:
+            raise RuntimeError("load a tree before starting the runtime")
+        self._started_wall = time.perf_counter()
+        self._started_sim = self.clock()
+        self._grid_origin = self.clock()  # the driver's periodic work starts on this grid
+        await self.driver.start()
+        self.backup.attach()
+        self.gate.attach()
+        self.supervisor.attach()
+        self.supervisor.register_local("tree", timeout=max(0.5, 5.0 / self.config.tick.rate_hz),
+                                       restart=self._restart_tree, auto_restart=True)
+        spawn = self.loop.create_task
+        period = 1.0 / self.config.tick.rate_hz
+        self._tick_origin = self._grid_origin + self.config.tick.phase * period
+        self._service_tasks = [spawn(self.supervisor.run(), name="supervisor"),
+                               spawn(self.backup.run(), name="backup"),
+                               spawn(self.gate.run(self._tick_origin + self.config.gate.phase * period),
+                                     name="gate")]
+        self.running = True
+        if tick:
+            self.gate.heartbeat()  # the first tick is due within one period: no spurious dead-man
+            self._start_tick_task()
+        else:
+            self.supervisor.set_watched("tree", False)
+        log.info("runtime_started", driver=getattr(self.driver, "name", "?"), realtime=self.realtime,
+                 sim_time=round(self.clock(), 3))
+
+    def _start_tick_task(self) -> None:
+        assert self.tick_loop is not None
+        self._tick_task = self.loop.create_task(self.tick_loop.run(self._tick_origin), name="tick")
+
+    @property
+    def tick_task(self) -> asyncio.Task | None:
+        return self._tick_task
+
+    def restart_tree(self) -> asyncio.Future:
+        """Run the tree again from its root (e.g. for a new goal); returns the future that
+        completes with the root's final status."""
+        task = self._tick_task
+        if task is not None and not task.done():
+            task.cancel()
+        if self.tree is not None:
+            self.tree.halt_tree()
+        self.completed = self.loop.create_future()
+        self.supervisor.set_watched("tree", True)
+        self.gate.heartbeat()
+        self._start_tick_task()
+        return self.completed
+
+    async def _restart_tree(self) -> bool:
+        """The supervisor's restart of the 'tree' component: halt it, start a new tick task."""
+        task = self._tick_task
+        if task is not None and not task.done():
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        if self.tree is not None:
+            with contextlib.suppress(Exception):
+                self.tree.halt_tree()
+        self._start_tick_task()
+        return True
+
+    async def run(self, duration: float | None = None) -> RunSummary:
+        """Run until the tree completes or ``duration`` seconds (loop time) have passed."""
+        if duration is None:
+            await asyncio.shield(self.completed)
+        else:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(asyncio.shield(self.completed), duration)
+        return self.summary()
+
+    async def stop(self) -> None:
+        """Stop ticking, halt the tree (cancelling async actions), send a final zero, stop the driver."""
+        if not self.running:
+            return
+        self.running = False
+        tasks = [t for t in (self._tick_task, *self._service_tasks) if t is not None]
+        for task in tasks:
+            task.cancel()
+        for task in tasks:
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        if self.tree is not None:
+            try:
+                self.tree.halt_tree()
+            except Exception as exc:
+                log.error("halt_error", error=str(exc))
+        self.gate.shutdown()
+        self.supervisor.detach()
+        self.gate.detach()
+        self.backup.detach()
+        await self.driver.stop()
+        log.info("runtime_stopped", sim_time=round(self.clock(), 3))
+
+    async def __aenter__(self) -> AutonomyRuntime:
+        await self.start()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.stop()
+
+    # -- reporting -----------------------------------------------------------------------------
+    def summary(self) -> RunSummary:
+        loop_stats = self.tick_loop.stats if self.tick_loop else None
+        late = loop_stats.lateness_percentiles() if loop_stats else {}
+        cost = loop_stats.cost_percentiles() if loop_stats else {}
+        completed = self.completed.done()
+        status = self.completed.result().name if completed else (
+            self.tick_loop.status.name if self.tick_loop else "IDLE")
+        return RunSummary(
+            status=status, completed=completed,
+            sim_time=self.clock() - self._started_sim,
+            wall_time=time.perf_counter() - self._started_wall,
+            ticks=loop_stats.count if loop_stats else 0,
+            tick_errors=loop_stats.errors if loop_stats else 0,
+            overruns=loop_stats.overruns if loop_stats else 0,
+            tick_cost_mean_ms=(loop_stats.cost_mean * 1e3) if loop_stats else 0.0,
+            tick_cost_p99_ms=cost.get("p99", 0.0) * 1e3,
+            lateness_p50_ms=late.get("p50", 0.0) * 1e3,
+            lateness_p99_ms=late.get("p99", 0.0) * 1e3,
+            health=self.supervisor.summary(),
+            supervisor_events=len(self.supervisor.events),
+            gate_switches=len(self.gate.switches),
+            estop_reasons=self.gate.estop_reasons,
+        )

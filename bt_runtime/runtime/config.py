@@ -1,0 +1,64 @@
+"""Runtime configuration (validated at the edge with pydantic; plain objects inside)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class TickConfig(_Model):
+    rate_hz: float = Field(100.0, gt=0, description="tree tick rate")
+    stop_on_completion: bool = Field(True, description="stop when the root returns SUCCESS/FAILURE")
+    spin_window_s: float = Field(0.0035, ge=0, description="real-time mode: yield-until-deadline window "
+                                                           "(stock asyncio wakes up to ~3 ms late)")
+    phase: float = Field(0.5, ge=0, lt=1, description="tick deadlines sit this fraction of a period after "
+                                                       "the driver's start, away from its periodic work")
+
+
+class ComponentWatch(_Model):
+    """Per-component watchdog settings (overrides the supervisor defaults)."""
+
+    timeout: float | None = Field(None, gt=0, description="silence (s) after which it is failed")
+    auto_restart: bool | None = None
+    critical: bool | None = Field(None, description="a dead critical component stops the robot")
+    watched: bool = True
+
+
+class SupervisorConfig(_Model):
+    period: float = Field(0.01, gt=0, description="watchdog check period (s)")
+    default_timeout: float = Field(1.0, gt=0, description="the paper's 1 s; a component that publishes "
+                                                           "slower than 2.5 Hz gets 2.5 of its periods")
+    startup_grace: float = Field(2.0, ge=0, description="time allowed for a first message")
+    auto_restart: bool = Field(False, description="restart failed components without being asked")
+    max_failed_restarts: int = Field(2, ge=1, description="then the component is dead")
+    restart_timeout: float = Field(5.0, gt=0, description="a restart that takes longer failed")
+    recovery_timeout: float = Field(2.0, gt=0, description="after a restart, data must flow within this")
+    components: dict[str, ComponentWatch] = Field(default_factory=dict)
+
+
+class BackupConfig(_Model):
+    period: float = Field(0.5, gt=0, description="housekeeping period (s)")
+    sizes: dict[str, int] = Field(default_factory=lambda: {
+        "scan": 50, "imu": 500, "odom": 500, "pose": 200, "bumper": 200, "battery": 120,
+        "cmd_vel": 1000, "nav_cmd_vel": 500})
+
+
+class GateConfig(_Model):
+    rate_hz: float = Field(100.0, gt=0)
+    phase: float = Field(0.1, ge=0, lt=1, description="the gate runs this fraction of a tick period after "
+                                                       "each tick, so tree commands go out at once")
+    deadman_timeout: float = Field(0.1, gt=0, description="tree heartbeat older than this: zero")
+    nav_stale_timeout: float = Field(0.25, gt=0, description="navigation command older than this: ignored")
+    tree_stale_timeout: float = Field(0.2, gt=0, description="tree command older than this: ignored")
+    passthrough: bool = Field(False, description="baseline mode: forward navigation commands only, "
+                                                 "no dead-man, like a plain Nav2 setup")
+
+
+class RuntimeConfig(_Model):
+    tick: TickConfig = Field(default_factory=TickConfig)
+    supervisor: SupervisorConfig = Field(default_factory=SupervisorConfig)
+    backup: BackupConfig = Field(default_factory=BackupConfig)
+    gate: GateConfig = Field(default_factory=GateConfig)

@@ -1,0 +1,331 @@
+"""The system supervisor: a watchdog over every component (the paper's fn_req1/2/5, non_freq1).
+
+Each component proves it is alive by its messages (sensor streams, navigation heartbeats, the
+tree's own tick heartbeat). Silent longer than its timeout (default 1 s) -> FAILED. Restarts
+happen on request (the tree asks) or automatically; after ``max_failed_restarts`` (2) failed
+restarts a component is DEAD, and a dead critical component stops the robot through the
+decision gate. Condition nodes ask through non-blocking queries; every state change is an
+event in ``events`` (with loop time) and a structlog line.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from enum import Enum
+from typing import TYPE_CHECKING, Any
+
+import structlog
+
+from .config import SupervisorConfig
+from .messages import ComponentInfo
+
+if TYPE_CHECKING:
+    from .driver import RobotDriver
+    from .gate import DecisionGate
+
+log = structlog.get_logger("bt_runtime.supervisor")
+
+
+class Health(Enum):
+    UNKNOWN = "unknown"  # not heard from yet (still within the start-up grace)
+    OK = "ok"
+    FAILED = "failed"  # silent for longer than its timeout
+    RESTARTING = "restarting"
+    DEAD = "dead"  # restart failed max_failed_restarts times
+
+    @property
+    def usable(self) -> bool:
+        return self is Health.OK
+
+
+@dataclass(slots=True, frozen=True)
+class SupervisorEvent:
+    t: float
+    component: str
+    state: Health
+    previous: Health
+    reason: str
+
+
+class ComponentRecord:
+    """What the supervisor knows about one component."""
+
+    __slots__ = ("name", "kind", "streams", "timeout", "critical", "auto_restart", "restartable",
+                 "state", "last_seen", "failed_restarts", "restarts", "failures", "restart_fn",
+                 "restart_task", "state_since", "watched", "depends_on")
+
+    def __init__(self, name: str, kind: str, streams: tuple[str, ...], timeout: float, critical: bool,
+                 auto_restart: bool, restartable: bool,
+                 restart_fn: Callable[[], Awaitable[bool]] | None = None):
+        self.name = name
+        self.kind = kind
+        self.streams = streams
+        self.timeout = timeout
+        self.critical = critical
+        self.auto_restart = auto_restart
+        self.restartable = restartable
+        self.state = Health.UNKNOWN
+        self.last_seen: float | None = None
+        self.failed_restarts = 0
+        self.restarts = 0
+        self.failures = 0
+        self.restart_fn = restart_fn
+        self.restart_task: asyncio.Task | None = None
+        self.state_since = 0.0
+        self.watched = True  # False while it is legitimately silent (e.g. an idle tree)
+        self.depends_on: tuple[str, ...] = ()  # components it cannot work without
+
+
+class SystemSupervisor:
+    """Watchdog, health states, restart policy and an event log."""
+
+    def __init__(self, driver: RobotDriver, config: SupervisorConfig | None = None, *,
+                 clock: Callable[[], float], gate: DecisionGate | None = None):
+        self.driver = driver
+        self.config = config or SupervisorConfig()
+        self.clock = clock
+        self.gate = gate
+        self.components: dict[str, ComponentRecord] = {}
+        self.events: list[SupervisorEvent] = []
+        self._unsubscribe: list[Callable[[], None]] = []
+        self._started_at = 0.0
+        self._listeners: list[Callable[[SupervisorEvent], Any]] = []
+
+    # -- setup ---------------------------------------------------------------------------------
+    def attach(self) -> None:
+        """Watch every component the driver reports, through its streams."""
+        self._started_at = self.clock()
+        for info in self.driver.components():
+            self._watch_driver_component(info)
+
+    def _watch_driver_component(self, info: ComponentInfo) -> None:
+        watch = self.config.components.get(info.name)
+        if watch is not None and not watch.watched:
+            return
+        cfg = self.config
+        default = cfg.default_timeout
+        if info.expected_rate_hz > 0:  # never less than 2.5 publish periods (a 1 Hz battery)
+            default = max(default, 2.5 / info.expected_rate_hz)
+        record = ComponentRecord(
+            info.name, info.kind, tuple(info.streams),
+            timeout=(watch.timeout if watch and watch.timeout else default),
+            critical=(watch.critical if watch and watch.critical is not None else True),
+            auto_restart=(watch.auto_restart if watch and watch.auto_restart is not None else cfg.auto_restart),
+            restartable=info.restartable)
+        record.state_since = self.clock()
+        record.depends_on = tuple(info.extra.get("depends_on", ()))
+        self.components[info.name] = record
+        for stream in info.streams:
+            self._unsubscribe.append(self.driver.subscribe(stream, self._seen_callback(record)))
+
+    def register_local(self, name: str, *, timeout: float | None = None, critical: bool = True,
+                       restart: Callable[[], Awaitable[bool]] | None = None, auto_restart: bool = False,
+                       kind: str = "runtime") -> None:
+        """Watch a component of this process (e.g. the tree) that calls ``heartbeat(name)``."""
+        watch = self.config.components.get(name)
+        if watch is not None:
+            timeout = watch.timeout or timeout
+            critical = critical if watch.critical is None else watch.critical
+            auto_restart = auto_restart if watch.auto_restart is None else watch.auto_restart
+        record = ComponentRecord(name, kind, (), timeout or self.config.default_timeout, critical,
+                                 auto_restart, restart is not None, restart)
+        record.state_since = self.clock()
+        self.components[name] = record
+
+    def _seen_callback(self, record: ComponentRecord) -> Callable[[Any], None]:
+        clock = self.clock
+
+        def seen(_msg: Any) -> None:
+            record.last_seen = clock()
+            if record.state is Health.UNKNOWN or record.state is Health.FAILED:
+                self._set_state(record, Health.OK, "messages flowing")
+
+        return seen
+
+    def heartbeat(self, name: str) -> None:
+        record = self.components[name]
+        record.last_seen = self.clock()
+        if record.state is Health.UNKNOWN or record.state is Health.FAILED:
+            self._set_state(record, Health.OK, "heartbeat")
+
+    def set_watched(self, name: str, watched: bool) -> None:
+        """Stop (or resume) expecting messages from ``name``; resuming restarts its clock."""
+        record = self.components[name]
+        record.watched = watched
+        if watched:
+            record.last_seen = self.clock()
+
+    def add_listener(self, callback: Callable[[SupervisorEvent], Any]) -> None:
+        self._listeners.append(callback)
+
+    def detach(self) -> None:
+        for unsubscribe in self._unsubscribe:
+            unsubscribe()
+        self._unsubscribe.clear()
+
+    # -- the watchdog task -----------------------------------------------------------------------
+    async def run(self) -> None:
+        """Check every component each period, on absolute deadlines."""
+        loop = asyncio.get_running_loop()
+        period = self.config.period
+        start = loop.time()
+        k = 0
+        while True:
+            k += 1
+            await asyncio.sleep(max(0.0, start + k * period - loop.time()))
+            self.check()
+
+    def check(self, now: float | None = None) -> None:
+        now = self.clock() if now is None else now
+        for record in self.components.values():
+            if not record.watched:
+                continue
+            state = record.state
+            if state is Health.OK:
+                if record.last_seen is not None and now - record.last_seen > record.timeout:
+                    self._fail(record, f"silent for {now - record.last_seen:.2f} s (timeout {record.timeout} s)")
+            elif state is Health.UNKNOWN:
+                if now - self._started_at > max(self.config.startup_grace, record.timeout):
+                    self._fail(record, "never heard from")
+
+    def _fail(self, record: ComponentRecord, reason: str) -> None:
+        record.failures += 1
+        blocked = self.failed_dependencies(record.name)
+        if blocked:
+            reason += f" (needs {', '.join(blocked)})"
+        self._set_state(record, Health.FAILED, reason)
+        if record.auto_restart and record.restartable and not blocked:
+            self.request_restart(record.name)
+
+    def _set_state(self, record: ComponentRecord, state: Health, reason: str) -> None:
+        previous = record.state
+        if previous is state:
+            return
+        now = self.clock()
+        record.state = state
+        record.state_since = now
+        event = SupervisorEvent(now, record.name, state, previous, reason)
+        self.events.append(event)
+        log.info("component_state", component=record.name, state=state.value, previous=previous.value,
+                 reason=reason, sim_time=round(now, 3))
+        if state is Health.DEAD and record.critical and self.gate is not None:
+            self.gate.emergency_stop(f"{record.name} dead")
+        for listener in tuple(self._listeners):
+            listener(event)
+
+    # -- queries (non-blocking; condition nodes call these every tick) ---------------------------
+    def health(self, name: str) -> Health:
+        """Current health; a component whose timeout just expired reads FAILED immediately."""
+        record = self.components.get(name)
+        if record is None:
+            return Health.UNKNOWN
+        if record.state is Health.OK and record.last_seen is not None and record.watched:
+            if self.clock() - record.last_seen > record.timeout:
+                return Health.FAILED
+        return record.state
+
+    def is_healthy(self, name: str) -> bool:
+        return self.health(name) is Health.OK
+
+    def all_healthy(self, names: list[str] | None = None) -> bool:
+        return all(self.health(n) is Health.OK for n in (names or self.components))
+
+    def is_failed(self, name: str) -> bool:
+        """FAILED, RESTARTING or DEAD: not merely unknown (start-up grace)."""
+        return self.health(name) in (Health.FAILED, Health.RESTARTING, Health.DEAD)
+
+    def failed_dependencies(self, name: str) -> list[str]:
+        """The components ``name`` depends on that are not OK (restart those first)."""
+        record = self.components.get(name)
+        if record is None:
+            return []
+        return [d for d in record.depends_on if d in self.components and self.health(d) is not Health.OK]
+
+    def unhealthy(self) -> list[str]:
+        return [n for n in self.components if self.health(n) is not Health.OK]
+
+    def dead(self) -> list[str]:
+        return [n for n, r in self.components.items() if r.state is Health.DEAD]
+
+    def age(self, name: str) -> float | None:
+        record = self.components.get(name)
+        if record is None or record.last_seen is None:
+            return None
+        return self.clock() - record.last_seen
+
+    def failed_restarts(self, name: str) -> int:
+        record = self.components.get(name)
+        return record.failed_restarts if record else 0
+
+    def restarting(self, name: str) -> bool:
+        record = self.components.get(name)
+        return record is not None and record.restart_task is not None and not record.restart_task.done()
+
+    def events_of(self, name: str) -> list[SupervisorEvent]:
+        return [e for e in self.events if e.component == name]
+
+    def summary(self) -> dict[str, str]:
+        return {n: self.health(n).value for n in self.components}
+
+    # -- restarts ------------------------------------------------------------------------------
+    def request_restart(self, name: str) -> asyncio.Task | None:
+        """Start restarting ``name`` in the background (non-blocking); joins a running restart."""
+        record = self.components.get(name)
+        if record is None or not record.restartable or record.state is Health.DEAD:
+            return None
+        blocked = self.failed_dependencies(name)
+        if blocked:  # restarting it cannot help while what it needs is down: restart that
+            tasks = [self.request_restart(d) for d in blocked if self.health(d) is Health.FAILED]
+            return next((t for t in tasks if t is not None), None)
+        if record.restart_task is not None and not record.restart_task.done():
+            return record.restart_task
+        record.restart_task = asyncio.get_running_loop().create_task(self.restart(name),
+                                                                     name=f"restart:{name}")
+        return record.restart_task
+
+    async def restart(self, name: str) -> bool:
+        """Restart ``name`` and confirm its data flows again. Counts failures; DEAD after the
+        configured number of failed restarts."""
+        record = self.components[name]
+        if record.state is Health.DEAD:
+            return False
+        cfg = self.config
+        record.restarts += 1
+        started = self.clock()
+        self._set_state(record, Health.RESTARTING, f"restart #{record.restarts} requested")
+        try:
+            if record.restart_fn is not None:
+                ok = await asyncio.wait_for(record.restart_fn(), cfg.restart_timeout)
+            else:
+                ok = await asyncio.wait_for(self.driver.restart(name), cfg.restart_timeout)
+        except TimeoutError:
+            ok = False
+        except Exception as exc:  # a driver error is a failed restart, not a crash
+            log.warning("restart_error", component=name, error=repr(exc))
+            ok = False
+        if ok:
+            ok = await self._data_resumed(record, started)
+        if ok:
+            record.failed_restarts = 0
+            self._set_state(record, Health.OK, "restarted, data flowing")
+            return True
+        if self.failed_dependencies(name):  # not its fault: what it needs is down
+            self._set_state(record, Health.FAILED, f"restart waited for {', '.join(self.failed_dependencies(name))}")
+            return False
+        record.failed_restarts += 1
+        if record.failed_restarts >= cfg.max_failed_restarts:
+            self._set_state(record, Health.DEAD, f"{record.failed_restarts} failed restarts")
+        else:
+            self._set_state(record, Health.FAILED, f"restart failed ({record.failed_restarts} of "
+                                                   f"{cfg.max_failed_restarts})")
+        return False
+
+    async def _data_resumed(self, record: ComponentRecord, since: float) -> bool:
+        deadline = self.clock() + self.config.recovery_timeout
+        while self.clock() < deadline:
+            if record.last_seen is not None and record.last_seen >= since:
+                return True
+            await asyncio.sleep(0.01)
+        return record.last_seen is not None and record.last_seen >= since

@@ -1,0 +1,240 @@
+"""Collision behaviours (fn_req6): detect, back out, locate the obstacle, mark it, re-plan.
+
+Detection works from a bumper/contact sensor or, for robots without one (the paper's
+ROSbot), from an IMU acceleration spike. The contact point is estimated from the contact
+direction (the bumper's bearing, or the opposite of the impact acceleration) rather than the
+paper's "straight ahead". Backing out retraces the recent commands from the data backup when
+the robot ran into the obstacle, or moves away from the contact otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+
+from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActionNode, SyncActionNode
+from bt_runtime.ports import input_port, output_port
+from bt_runtime.runtime.messages import Contact, Imu, Pose2D
+
+from .types import POSE, wrap_angle
+
+SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
+
+
+def latest_pose(context) -> Pose2D | None:
+    msg = context.backup.latest("pose")
+    return msg.pose if msg is not None else None
+
+
+def imu_impact(context, window: float, threshold: float) -> tuple[float, float] | None:
+    """(magnitude, contact bearing in the robot frame) of the strongest IMU acceleration above
+    ``threshold`` in the last ``window`` seconds, or None. The obstacle is on the side opposite
+    to the acceleration it caused."""
+    best = None
+    for msg in context.backup.since("imu", context.clock() - window):
+        if not isinstance(msg, Imu):
+            continue
+        ax, ay = msg.accel_x, msg.accel_y
+        if not (math.isfinite(ax) and math.isfinite(ay)):
+            continue
+        magnitude = math.hypot(ax, ay)
+        if magnitude > threshold and (best is None or magnitude > best[0]):
+            best = (magnitude, math.atan2(-ay, -ax))
+    return best
+
+
+class CollisionDetected(ConditionNode):
+    """SUCCESS while in contact (bumper) or just after an impact (IMU spike); writes the
+    contact bearing (robot frame, rad, 0 = ahead) and, from the bumper, the contact point."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("source", str, "any", "bumper | imu | any"),
+                input_port("imu_threshold", float, 6.0, "m/s^2; well above the base's acceleration limits"),
+                input_port("imu_window", float, 0.25, "s of IMU history to look at"),
+                output_port("direction", float, "{collision_direction}"),
+                output_port("contact_point", POSE, "{contact_point}")]
+
+    def tick(self):
+        ctx = self.context
+        source = self.get_input("source")
+        if source in ("bumper", "any"):
+            contact = ctx.backup.latest("bumper")
+            if isinstance(contact, Contact) and contact.in_contact and math.isfinite(contact.direction):
+                self.set_output("direction", float(contact.direction))
+                if contact.point is not None and all(math.isfinite(c) for c in contact.point):
+                    self.set_output("contact_point", Pose2D(contact.point[0], contact.point[1], 0.0))
+                return SUCCESS
+        if source in ("imu", "any"):
+            impact = imu_impact(ctx, self.get_input("imu_window"), self.get_input("imu_threshold"))
+            if impact is not None:
+                self.set_output("direction", impact[1])
+                return SUCCESS
+        return FAILURE
+
+
+class InContact(ConditionNode):
+    """SUCCESS while the bumper reports contact."""
+
+    def tick(self):
+        contact = self.context.backup.latest("bumper")
+        return SUCCESS if isinstance(contact, Contact) and contact.in_contact else FAILURE
+
+
+class EstimateContactPoint(SyncActionNode):
+    """Where the obstacle is: the bumper's contact point if known, else the robot's edge in
+    the contact direction, pushed ``offset`` further out."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("direction", float, "{collision_direction}", "contact bearing, robot frame"),
+                input_port("offset", float, 0.05, "m beyond the footprint"),
+                output_port("point", POSE, "{contact_point}")]
+
+    def tick(self):
+        ctx = self.context
+        contact = ctx.backup.latest("bumper")
+        pose = latest_pose(ctx)
+        if pose is None:
+            return FAILURE
+        bearing = self.get_input("direction", 0.0)
+        offset = self.get_input("offset")
+        heading = pose.yaw + bearing
+        if isinstance(contact, Contact) and contact.in_contact and contact.point is not None \
+                and all(math.isfinite(c) for c in contact.point):
+            x, y = contact.point
+            x, y = x + offset * math.cos(heading), y + offset * math.sin(heading)
+        else:
+            reach = ctx.robot.radius + offset
+            x, y = pose.x + reach * math.cos(heading), pose.y + reach * math.sin(heading)
+        self.set_output("point", Pose2D(x, y, 0.0))
+        return SUCCESS
+
+
+class ReverseOut(StatefulActionNode):
+    """Back out of a collision through the gate (tree commands beat navigation).
+
+    If the robot was driving into the contact, the recent commands from the data backup are
+    replayed backwards (newest first, negated, at most ``speed``); otherwise it moves straight
+    away from the contact. Done once out of contact and ``clearance`` m further, or after
+    ``max_distance`` m; FAILURE after ``timeout`` s.
+    """
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("direction", float, "{collision_direction}", "contact bearing, robot frame"),
+                input_port("speed", float, 0.1, "m/s"),
+                input_port("max_distance", float, 0.4, "m"),
+                input_port("clearance", float, 0.1, "m travelled after contact ends"),
+                input_port("history", float, 3.0, "s of commands to retrace"),
+                input_port("timeout", float, 10.0, "s")]
+
+    def on_start(self):
+        ctx = self.context
+        self._t0 = ctx.clock()
+        self._speed = abs(self.get_input("speed"))
+        self._max = self.get_input("max_distance")
+        self._clearance = self.get_input("clearance")
+        self._timeout = self.get_input("timeout")
+        self._plan = self._make_plan(self.get_input("direction", 0.0), self.get_input("history"))
+        self._start = self._odom_pose()
+        self._free_at: Pose2D | None = None
+        return self.on_running()
+
+    def _odom_pose(self) -> Pose2D | None:
+        odom = self.context.backup.latest("odom")
+        return odom.pose if odom is not None else None
+
+    def _make_plan(self, direction: float, history: float) -> list[tuple[float, float, float]]:
+        """Segments (end time offset, v, w) to command."""
+        motion = self.context.backup.recent_motion(history)
+        forward = sum(c.linear for _, c in motion)
+        ran_into_it = motion and abs(wrap_angle(direction - (0.0 if forward >= 0 else math.pi))) < math.radians(100)
+        speed = self._speed
+        if ran_into_it:
+            plan, elapsed = [], 0.0
+            reversed_motion = list(reversed(motion))
+            for i, (stamp, cmd) in enumerate(reversed_motion):
+                older = reversed_motion[i + 1][0] if i + 1 < len(reversed_motion) else stamp - 0.01
+                dt = max(0.0, stamp - older)
+                scale = min(1.0, speed / abs(cmd.linear)) if cmd.linear else 1.0
+                elapsed += dt / max(scale, 1e-3)
+                plan.append((elapsed, -cmd.linear * scale, -cmd.angular * scale))
+            if plan:
+                return plan
+        # standing, or hit from the side/behind: move directly away from the contact
+        along = -math.cos(direction)
+        v = speed * (1.0 if along >= 0 else -1.0) if abs(along) > 0.3 else -speed
+        return [(self._timeout, v, 0.0)]
+
+    def on_running(self):
+        ctx = self.context
+        now = ctx.clock()
+        elapsed = now - self._t0
+        if elapsed > self._timeout:
+            ctx.gate.clear_tree_command()
+            return FAILURE
+        pose = self._odom_pose()
+        travelled = pose.distance_to(self._start) if pose is not None and self._start is not None else elapsed * self._speed
+        contact = ctx.backup.latest("bumper")
+        in_contact = isinstance(contact, Contact) and contact.in_contact
+        if not in_contact and self._free_at is None:
+            self._free_at = pose
+        cleared = (self._free_at is not None and pose is not None
+                   and pose.distance_to(self._free_at) >= self._clearance)
+        if travelled >= self._max or cleared or (not in_contact and elapsed > self._plan[-1][0]):
+            ctx.gate.clear_tree_command()
+            return SUCCESS
+        v, w = self._command_at(elapsed)
+        ctx.gate.set_tree_command(v, w)
+        return RUNNING
+
+    def _command_at(self, elapsed: float) -> tuple[float, float]:
+        for end, v, w in self._plan:
+            if elapsed <= end:
+                return v, w
+        v = -self._speed  # plan exhausted but still touching: keep backing off
+        return v, 0.0
+
+    def on_halted(self):
+        self.context.gate.clear_tree_command()
+
+
+class StopRobot(SyncActionNode):
+    """Command zero through the gate at tree priority (navigation cannot move the robot)."""
+
+    def tick(self):
+        self.context.gate.set_tree_command(0.0, 0.0)
+        return SUCCESS
+
+
+class ReleaseRobot(SyncActionNode):
+    """Drop the tree's command so navigation drives again."""
+
+    def tick(self):
+        self.context.gate.clear_tree_command()
+        return SUCCESS
+
+
+class MarkObstacle(AsyncActionNode):
+    """Add an obstacle at ``point`` to the navigation map (kept across costmap clears)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("point", POSE, "{contact_point}"), input_port("radius", float, 0.15, "m")]
+
+    async def run(self):
+        point = self.get_input("point")
+        await self.context.navigation.add_obstacle(point.x, point.y, self.get_input("radius"))
+        return SUCCESS
+
+
+class ClearCostmaps(AsyncActionNode):
+    """Clear the navigation costmaps (obstacle layers): ``local``, ``global`` or ``both``."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("which", str, "both")]
+
+    async def run(self):
+        await self.context.navigation.clear_costmaps(self.get_input("which"))
+        return SUCCESS

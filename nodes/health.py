@@ -1,0 +1,182 @@
+"""Health behaviours (fn_req1-5): ask the supervisor, restart components, slow down, stop.
+
+Every query goes to the runtime's supervisor through ``node.context`` and never blocks:
+restarts run in the background (``RequestRestarts``) or as an async action
+(``RestartComponent``), so the tree keeps ticking while a driver comes back.
+"""
+
+from __future__ import annotations
+
+from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActionNode, SyncActionNode
+from bt_runtime.ports import input_port, output_port
+from bt_runtime.runtime.supervisor import Health
+
+from .types import NAMES
+
+SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
+
+
+def _names(node, port: str = "components") -> list[str]:
+    """The listed components, or every watched component when the port is empty."""
+    names = node.get_input(port, [])
+    sup = node.context.supervisor
+    return list(names) if names else [n for n in sup.components if n != "tree"]
+
+
+class ComponentHealthy(ConditionNode):
+    """SUCCESS if the supervisor reports ``component`` OK (silent > timeout reads as failed)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("component", str, description="component name, e.g. lidar")]
+
+    def tick(self):
+        return SUCCESS if self.context.supervisor.is_healthy(self.get_input("component")) else FAILURE
+
+
+class ComponentsHealthy(ConditionNode):
+    """SUCCESS if every listed component (all watched ones when empty) is OK; the unhealthy
+    ones are written to ``unhealthy``."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("components", NAMES, "", "names separated by ';' (empty: all)"),
+                output_port("unhealthy", NAMES, "{unhealthy}", "the components that are not OK")]
+
+    def tick(self):
+        sup = self.context.supervisor
+        bad = [n for n in _names(self) if not sup.is_healthy(n)]
+        self.set_output("unhealthy", bad)
+        return FAILURE if bad else SUCCESS
+
+
+class AnyComponentDead(ConditionNode):
+    """SUCCESS if a listed component is DEAD (its restarts failed); names go to ``dead``."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("components", NAMES, "", "names separated by ';' (empty: all)"),
+                output_port("dead", NAMES, "{dead_components}")]
+
+    def tick(self):
+        sup = self.context.supervisor
+        dead = [n for n in _names(self) if sup.health(n) is Health.DEAD]
+        self.set_output("dead", dead)
+        return SUCCESS if dead else FAILURE
+
+
+class RequestRestarts(SyncActionNode):
+    """Ask the supervisor to restart every failed, restartable component (non-blocking; a
+    restart already under way is joined, not repeated). SUCCESS; ``restarting`` lists them."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("components", NAMES, "", "names separated by ';' (empty: all)"),
+                output_port("restarting", NAMES, "{restarting}")]
+
+    def tick(self):
+        sup = self.context.supervisor
+        restarting = []
+        for name in _names(self):
+            health = sup.health(name)
+            if health is Health.RESTARTING or sup.restarting(name) or health is Health.FAILED and sup.request_restart(name) is not None:
+                restarting.append(name)
+        self.set_output("restarting", restarting)
+        return SUCCESS
+
+
+class RestartComponent(AsyncActionNode):
+    """Restart ``component`` and wait until its data flows again: SUCCESS, or FAILURE if the
+    restart failed (after two failures the supervisor declares it dead)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("component", str)]
+
+    async def run(self):
+        return SUCCESS if await self.context.supervisor.restart(self.get_input("component")) else FAILURE
+
+
+class WaitForHealthy(StatefulActionNode):
+    """RUNNING until the listed components are OK; FAILURE after ``timeout`` s or if one is DEAD."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("components", NAMES, "", "names separated by ';' (empty: all)"),
+                input_port("timeout", float, 15.0, "seconds")]
+
+    def on_start(self):
+        self._deadline = self.context.clock() + self.get_input("timeout")
+        return self.on_running()
+
+    def on_running(self):
+        sup = self.context.supervisor
+        states = [sup.health(n) for n in _names(self)]
+        if all(s is Health.OK for s in states):
+            return SUCCESS
+        if any(s is Health.DEAD for s in states) or self.context.clock() > self._deadline:
+            return FAILURE
+        return RUNNING
+
+
+class SetSpeedLimit(SyncActionNode):
+    """Cap the robot's speed in the decision gate (and navigation), e.g. while a sensor is down."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("linear", float, 0.1, "m/s"), input_port("angular", float, 0.5, "rad/s"),
+                input_port("reason", str, "degraded")]
+
+    def tick(self):
+        gate = self.context.gate
+        limit = (abs(self.get_input("linear")), abs(self.get_input("angular")))
+        if gate.speed_limit != limit:
+            gate.set_speed_limit(*limit, reason=self.get_input("reason"))
+        return SUCCESS
+
+
+class RestoreSpeedLimit(SyncActionNode):
+    """Lift the speed cap (no-op when none is set)."""
+
+    def tick(self):
+        if self.context.gate.speed_limit is not None:
+            self.context.gate.set_speed_limit(None)
+        return SUCCESS
+
+
+class EmergencyStop(SyncActionNode):
+    """Stop the robot through the gate (overrides every command) until released."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("reason", str, "behavior tree")]
+
+    def tick(self):
+        self.context.gate.emergency_stop(self.get_input("reason"))
+        return SUCCESS
+
+
+class ReleaseEmergencyStop(SyncActionNode):
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("reason", str, "behavior tree")]
+
+    def tick(self):
+        self.context.gate.release(self.get_input("reason"))
+        return SUCCESS
+
+
+class IsSafeToContinue(ConditionNode):
+    """fn_req2: FAILURE when continuing is not safe: a listed component is dead, or an
+    emergency stop is active."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("components", NAMES, "", "critical components (empty: all)")]
+
+    def tick(self):
+        ctx = self.context
+        if ctx.gate.estop_active:
+            return FAILURE
+        sup = ctx.supervisor
+        return FAILURE if any(sup.health(n) is Health.DEAD for n in _names(self)) else SUCCESS

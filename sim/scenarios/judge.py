@@ -1,0 +1,152 @@
+"""Judging a run from its records against the scenario's success criteria.
+
+Each criterion gives (passed, reason); the reason says what was observed either way, so a
+failure without the autonomy layer is recorded for its real cause ("lidar never restarted",
+"closest approach 0.84 m", ...).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bt_runtime.runtime.supervisor import Health
+
+from .record import RunRecord
+from .spec import (
+    AlternativeReached,
+    ComponentReset,
+    GoalRefused,
+    ObstacleInMap,
+    OutOfContact,
+    ReachGoal,
+    ScenarioSpec,
+)
+
+T, X, Y, YAW, V, W, CONTACT = range(7)
+STOPPED = 0.05  # m/s
+
+
+@dataclass
+class Verdict:
+    criterion: str
+    passed: bool
+    reason: str
+
+
+def _after(traj: np.ndarray, t0: float, t1: float | None = None) -> np.ndarray:
+    mask = traj[:, T] >= t0
+    if t1 is not None:
+        mask &= traj[:, T] < t1
+    return traj[mask]
+
+
+def component_reset(rec: RunRecord, c: ComponentReset) -> Verdict:
+    events = [e for e in rec.supervisor_events if e.component == c.component]
+    restarts = [i for i, e in enumerate(events) if e.state is Health.RESTARTING]
+    recovered = [e for i, e in enumerate(events)
+                 if e.state is Health.OK and any(r < i for r in restarts) and events[i - 1].state is Health.RESTARTING]
+    final = rec.final_health.get(c.component, "unknown")
+    failed = [e for e in events if e.state in (Health.FAILED, Health.DEAD)]
+    name = f"component_reset({c.component})"
+    if recovered and final == "ok":
+        t_fail = f"failed at {failed[0].t:.2f} s, " if failed else ""
+        return Verdict(name, True, f"{t_fail}restarted, OK at {recovered[-1].t:.2f} s")
+    if not restarts:
+        return Verdict(name, False, f"never restarted (health at the end: {final})")
+    return Verdict(name, False, f"restart attempted {len(restarts)}x but health at the end is {final}")
+
+
+def _reached(rec: RunRecord, index: int, tolerance: float) -> tuple[bool, float, float | None]:
+    goal = rec.goals[index]
+    later = rec.goals[index + 1].sent if index + 1 < len(rec.goals) else None
+    traj = _after(rec.trajectory, goal.sent, later)
+    if not len(traj):
+        return False, math.inf, None
+    dist = np.hypot(traj[:, X] - goal.pose.x, traj[:, Y] - goal.pose.y)
+    at_goal = (dist <= tolerance) & (np.abs(traj[:, V]) < STOPPED)
+    hit = np.flatnonzero(at_goal)
+    return bool(len(hit)), float(dist.min()), (float(traj[hit[0], T]) if len(hit) else None)
+
+
+def reach_goal(rec: RunRecord, c: ReachGoal) -> Verdict:
+    name = f"reach_goal({c.goal})"
+    if c.goal >= len(rec.goals):
+        return Verdict(name, False, "the goal was never sent")
+    ok, closest, when = _reached(rec, c.goal, c.tolerance)
+    if ok:
+        return Verdict(name, True, f"stopped within {c.tolerance} m at {when:.2f} s")
+    return Verdict(name, False, f"not reached: closest approach {closest:.2f} m")
+
+
+def goal_refused(rec: RunRecord, c: GoalRefused) -> Verdict:
+    name = f"goal_refused({c.goal})"
+    if c.goal >= len(rec.goals):
+        return Verdict(name, False, "the goal was never sent")
+    goal = rec.goals[c.goal]
+    until = rec.goals[c.goal + 1].sent if c.goal + 1 < len(rec.goals) else None
+    traj = _after(rec.trajectory, goal.sent, until)
+    travelled = float(np.hypot(np.diff(traj[:, X]), np.diff(traj[:, Y])).sum()) if len(traj) > 1 else 0.0
+    moves = [r for r in rec.nav_requests
+             if r.method in ("navigate_to_pose", "follow_path") and r.goal is not None
+             and r.goal.distance_to(goal.pose) < 0.3 and r.t >= goal.sent and (until is None or r.t < until)]
+    if not moves and travelled <= c.max_travel:
+        return Verdict(name, True, f"no navigation towards it; moved {travelled:.2f} m meanwhile")
+    why = f"{len(moves)} navigation request(s) towards it" if moves else ""
+    return Verdict(name, False, f"drove towards it: {why} {travelled:.2f} m travelled".strip())
+
+
+def alternative_reached(rec: RunRecord, c: AlternativeReached) -> Verdict:
+    name = f"alternative_reached({c.goal})"
+    if c.goal >= len(rec.goals):
+        return Verdict(name, False, "the goal was never sent")
+    goal = rec.goals[c.goal]
+    traj = _after(rec.trajectory, goal.sent)
+    if len(traj) < 2:
+        return Verdict(name, False, "no trajectory after the goal")
+    start = traj[0]
+    final = traj[-1]
+    d_final = math.hypot(final[X] - goal.pose.x, final[Y] - goal.pose.y)
+    d_start = math.hypot(start[X] - goal.pose.x, start[Y] - goal.pose.y)
+    stopped = abs(final[V]) < STOPPED and not final[CONTACT]
+    if d_final <= c.within and stopped and d_start - d_final > 0.3:
+        return Verdict(name, True, f"stopped {d_final:.2f} m from the unreachable goal")
+    return Verdict(name, False, f"ended {d_final:.2f} m from the goal (needed <= {c.within} m, stopped={stopped})")
+
+
+def out_of_contact(rec: RunRecord, c: OutOfContact) -> Verdict:
+    name = "out_of_contact"
+    traj = rec.trajectory
+    if not len(traj):
+        return Verdict(name, False, "no trajectory")
+    last = _after(traj, traj[-1, T] - c.for_last)
+    touching = bool(last[:, CONTACT].any())
+    if not touching:
+        return Verdict(name, True, f"no contact in the last {c.for_last:.1f} s")
+    return Verdict(name, False, f"still in contact during the last {c.for_last:.1f} s")
+
+
+def obstacle_in_map(rec: RunRecord, c: ObstacleInMap) -> Verdict:
+    name = f"obstacle_in_map({c.obstacle})"
+    shape = rec.obstacles.get(c.obstacle)
+    if shape is None:
+        return Verdict(name, False, f"no obstacle named {c.obstacle} was created")
+    marks = [r for r in rec.nav_requests if r.method == "add_obstacle" and r.goal is not None]
+    near = [r for r in marks if shape.distance(r.goal.x, r.goal.y) <= c.within]
+    if near:
+        return Verdict(name, True, f"{len(near)} map mark(s) within {c.within} m of it")
+    return Verdict(name, False, f"not in the map ({len(marks)} mark(s) elsewhere)" if marks else "not in the map")
+
+
+JUDGES = {"component_reset": component_reset, "reach_goal": reach_goal, "goal_refused": goal_refused,
+          "alternative_reached": alternative_reached, "out_of_contact": out_of_contact,
+          "obstacle_in_map": obstacle_in_map}
+
+
+def judge(spec: ScenarioSpec, rec: RunRecord) -> list[Verdict]:
+    verdicts = [JUDGES[c.kind](rec, c) for c in spec.success]
+    if rec.tick_errors:
+        verdicts.append(Verdict("no_tick_errors", False, f"{rec.tick_errors} tick error(s)"))
+    return verdicts

@@ -1,0 +1,100 @@
+"""The tick task: 100 Hz on absolute deadlines, errors never kill it, context reaches nodes."""
+
+from __future__ import annotations
+
+import asyncio
+
+from bt_runtime import NodeStatus, SyncActionNode
+from bt_runtime.runtime.context import RuntimeContext
+
+from .conftest import tree_xml
+
+
+async def test_ticks_on_absolute_deadlines(make_runtime):
+    stamps = []
+
+    def register(factory):
+        factory.register_simple_condition("Stamp", lambda n: (stamps.append(n.context.clock()),
+                                                              NodeStatus.SUCCESS)[1])
+
+    rt = make_runtime(tree_xml('<KeepRunningUntilFailure><Stamp/></KeepRunningUntilFailure>'),
+                      register=[register])
+    await rt.start()
+    await asyncio.sleep(2.0)
+    await rt.stop()
+    diffs = [b - a for a, b in zip(stamps, stamps[1:])]
+    assert len(stamps) >= 199
+    assert max(abs(d - 0.01) for d in diffs) < 1e-9
+    assert abs(stamps[-1] - (stamps[0] + 0.01 * (len(stamps) - 1))) < 1e-9  # no drift
+    assert rt.tick_loop.stats.overruns == 0
+
+
+class Flaky(SyncActionNode):
+    """Raises on chosen calls, succeeds otherwise."""
+
+    calls = 0
+    fail_on = {3, 4}
+
+    def tick(self):
+        type(self).calls += 1
+        if type(self).calls in self.fail_on:
+            raise ValueError("sensor parse error")
+        return NodeStatus.SUCCESS
+
+
+async def test_a_tick_error_does_not_kill_the_loop(make_runtime):
+    Flaky.calls = 0
+
+    def register(factory):
+        factory.register_node_type(Flaky)
+
+    rt = make_runtime(tree_xml('<KeepRunningUntilFailure><Sequence name="outer"><Flaky name="reader"/>'
+                               '</Sequence></KeepRunningUntilFailure>'), register=[register])
+    await rt.start()
+    gate = rt.gate
+    await asyncio.sleep(0.025)
+    assert Flaky.calls == 2
+    await asyncio.sleep(0.01)  # call 3 raises
+    assert rt.tick_loop.stats.errors == 1
+    assert gate.estop_active and gate.last_output.is_zero
+    err = rt.tick_loop.last_error
+    assert err.node_path == "reader" and "sensor parse error" in str(err)
+    await asyncio.sleep(0.01)  # call 4 raises again
+    await asyncio.sleep(0.01)  # call 5 succeeds: the latch is released
+    assert rt.tick_loop.stats.errors == 2 and not gate.estop_active
+    await asyncio.sleep(0.5)
+    assert Flaky.calls > 50 and rt.tick_task is not None and not rt.tick_task.done()
+    await rt.stop()
+
+
+async def test_nodes_reach_the_runtime_through_the_context(make_runtime):
+    seen = {}
+
+    class Probe(SyncActionNode):
+        def tick(self):
+            ctx = self.context
+            seen["ctx"] = ctx
+            seen["health"] = ctx.supervisor.summary()
+            ctx.gate.set_tree_command(0.05, 0.0)
+            return NodeStatus.SUCCESS
+
+    rt = make_runtime(tree_xml('<Sequence><Sleep msec="300"/><Probe/></Sequence>'),
+                      register=[lambda f: f.register_node_type(Probe)])
+    await rt.start()
+    summary = await rt.run(duration=5)
+    await rt.stop()
+    assert summary.status == "SUCCESS" and summary.completed
+    assert isinstance(seen["ctx"], RuntimeContext) and seen["ctx"].driver is rt.driver
+    assert seen["health"]["lidar"] == "ok"
+
+
+async def test_tree_restarted_by_supervisor_after_the_tick_task_dies(make_runtime):
+    rt = make_runtime()
+    await rt.start()
+    await asyncio.sleep(0.2)
+    rt.tick_task.cancel()
+    await asyncio.sleep(2.5)
+    states = [e.state.value for e in rt.supervisor.events_of("tree")]
+    assert states[-3:] == ["failed", "restarting", "ok"]
+    assert not rt.tick_task.done()
+    await rt.stop()
