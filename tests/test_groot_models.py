@@ -147,7 +147,7 @@ def test_embed_refuses_malformed(bad: str) -> None:
 
 
 def test_cli_print_embed_check(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    args = ["--register", "tests.test_groot_models:register"]
+    args = ["--no-nodes", "--register", "tests.test_groot_models:register"]
     out = tmp_path / "models.xml"
     assert cli.main([*args, "--out", str(out)]) == 0
     assert out.read_text() == models_xml(make_factory())
@@ -162,6 +162,19 @@ def test_cli_print_embed_check(tmp_path: Path, capsys: pytest.CaptureFixture) ->
     bad = tmp_path / "bad.xml"
     bad.write_text("<root>")
     assert cli.main([*args, "--embed", str(bad)]) == 2
+
+
+def test_cli_includes_the_project_nodes_by_default(tmp_path: Path) -> None:
+    nodes = pytest.importorskip("nodes")
+    register_all = getattr(nodes, "register_all", None)
+    if register_all is None:
+        pytest.skip("the nodes package has no register_all yet")
+    f = BehaviorTreeFactory()
+    register_all(f)
+    out = tmp_path / "models.xml"
+    assert cli.main(["--out", str(out)]) == 0
+    assert out.read_text() == models_xml(f)
+    assert out.read_text().count(" ID=") > 3
 
 
 def test_cli_parser_and_module_entry(tmp_path: Path) -> None:
