@@ -483,6 +483,15 @@ async def test_bind_host_and_port_conflict() -> None:
 # the shared checkers and btview, as subprocesses
 # ---------------------------------------------------------------------------------------------
 
+async def flip_guard(leaves: Leaves, ticker: Ticker) -> None:
+    """Make the guard fail now and then: without it the test tree looks the same at every
+    STATUS sample (one action RUNNING, the rest idle-after-success), and clients that report
+    changes (the probe, btview echo) would see none."""
+    while True:
+        leaves.cond = S.FAILURE if leaves.cond is S.SUCCESS and ticker.ticks % 3 == 0 else S.SUCCESS
+        await asyncio.sleep(0.023)
+
+
 async def run_proc(*argv: str, timeout: float = 40.0) -> tuple[int, str, str]:
     env = dict(os.environ, NO_COLOR="1", COLUMNS="160")
     proc = await asyncio.create_subprocess_exec(*argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
@@ -500,10 +509,12 @@ async def test_groot2_probe_hooks_strict_passes() -> None:
     leaves.move_ticks = 7
     async with serving(tree) as (server, _):
         ticker = Ticker(tree, period=0.01).start()
+        flipper = asyncio.get_running_loop().create_task(flip_guard(leaves, ticker))
         count = sum(len(r.nodes) for r in tree.subtrees)
         rc, out, err = await run_proc(sys.executable, str(TOOLS / "groot2_probe.py"), "--port", str(server.port),
                                       "--expect-nodes", str(count), "--hooks", "--strict", "--no-btview",
                                       "--samples", "8", "--interval", "0.037", "--record-seconds", "0.3")
+        flipper.cancel()
         await ticker.stop()
     report = json.loads(out)
     assert rc == 0 and report["passed"], (report["required_failed"], report["advisory_failed"], err[-500:])
@@ -522,6 +533,7 @@ async def test_btview_headless_commands(tmp_path) -> None:
     count = sum(len(r.nodes) for r in tree.subtrees)
     async with serving(tree) as (server, _):
         ticker = Ticker(tree, period=0.01).start()
+        flipper = asyncio.get_running_loop().create_task(flip_guard(leaves, ticker))
         conn = ["--port", str(server.port), "--timeout", "2"]
         btview = [sys.executable, "-m", "btview"]
         rec = tmp_path / "session.btv.jsonl"
@@ -531,6 +543,7 @@ async def test_btview_headless_commands(tmp_path) -> None:
             run_proc(*btview, "blackboard", *conn, "--json", "Main", "sub"),
             run_proc(*btview, "echo", *conn, "--json", "--duration", "1.0", "--exit-on-error"),
             run_proc(*btview, "record", *conn, "--duration", "1.0", "-o", str(rec)))
+        flipper.cancel()
         await ticker.stop()
     (rc1, snap, e1), (rc2, info, e2), (rc3, bb, e3), (rc4, echo, e4), (rc5, _, e5) = results
     assert rc1 == 0 and f"{count} nodes" in snap, e1
