@@ -15,7 +15,7 @@ from typing import IO
 import structlog
 
 _LEVELS = {"debug": logging.DEBUG, "info": logging.INFO, "warning": logging.WARNING,
-           "error": logging.ERROR}
+           "error": logging.ERROR, "critical": logging.CRITICAL}
 
 
 class _SafeStream:

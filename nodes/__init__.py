@@ -9,6 +9,7 @@ from __future__ import annotations
 from bt_runtime import BehaviorTreeFactory
 
 from . import battery, collision, goals, health, path
+from .nav2 import register_nav2_nodes
 
 AUTONOMY_NODES = [
     health.ComponentHealthy, health.ComponentsHealthy, health.AnyComponentDead, health.RequestRestarts,
@@ -29,8 +30,7 @@ def register_autonomy_nodes(factory: BehaviorTreeFactory) -> None:
 
 def register_all(factory: BehaviorTreeFactory) -> None:
     register_autonomy_nodes(factory)
-    try:
-        from .nav2 import register_nav2_nodes
-    except ImportError:
-        return
     register_nav2_nodes(factory)
+
+
+__all__ = ["AUTONOMY_NODES", "register_all", "register_autonomy_nodes", "register_nav2_nodes"]

@@ -25,21 +25,39 @@ def latest_pose(context) -> Pose2D | None:
     return msg.pose if msg is not None else None
 
 
-def imu_impact(context, window: float, threshold: float) -> tuple[float, float] | None:
-    """(magnitude, contact bearing in the robot frame) of the strongest IMU acceleration above
-    ``threshold`` in the last ``window`` seconds, or None. The obstacle is on the side opposite
-    to the acceleration it caused."""
-    best = None
-    for msg in context.backup.since("imu", context.clock() - window):
-        if not isinstance(msg, Imu):
-            continue
-        ax, ay = msg.accel_x, msg.accel_y
-        if not (math.isfinite(ax) and math.isfinite(ay)):
-            continue
-        magnitude = math.hypot(ax, ay)
-        if magnitude > threshold and (best is None or magnitude > best[0]):
-            best = (magnitude, math.atan2(-ay, -ax))
-    return best
+class ImpactDetector:
+    """Watches the IMU stream in the data backup for acceleration spikes (impacts).
+
+    Each call looks only at the samples that arrived since the previous call and remembers the
+    latest spike, so a 100 Hz condition costs almost nothing. The obstacle is on the side
+    opposite to the acceleration it caused.
+    """
+
+    __slots__ = ("_since", "_spike")
+
+    def __init__(self) -> None:
+        self._since = -math.inf
+        self._spike: tuple[float, float, float] | None = None  # (time, magnitude, bearing)
+
+    def __call__(self, context, window: float, threshold: float) -> tuple[float, float] | None:
+        """(magnitude, contact bearing in the robot frame) of a spike above ``threshold`` within
+        the last ``window`` seconds, or None."""
+        samples = context.backup.buffers.get("imu")
+        if samples is not None:
+            for stamp, msg in samples.since_stamped(self._since):
+                if stamp <= self._since or not isinstance(msg, Imu):
+                    continue
+                ax, ay = msg.accel_x, msg.accel_y
+                if math.isfinite(ax) and math.isfinite(ay):
+                    magnitude = math.hypot(ax, ay)
+                    if magnitude > threshold and (self._spike is None or stamp - self._spike[0] > window
+                                                  or magnitude > self._spike[1]):
+                        self._spike = (stamp, magnitude, math.atan2(-ay, -ax))
+                self._since = stamp
+        spike = self._spike
+        if spike is None or context.clock() - spike[0] > window:
+            return None
+        return spike[1], spike[2]
 
 
 class CollisionDetected(ConditionNode):
@@ -54,6 +72,10 @@ class CollisionDetected(ConditionNode):
                 output_port("direction", float, "{collision_direction}"),
                 output_port("contact_point", POSE, "{contact_point}")]
 
+    def __init__(self, name, config=None):
+        super().__init__(name, config)
+        self._impacts = ImpactDetector()
+
     def tick(self):
         ctx = self.context
         source = self.get_input("source")
@@ -65,7 +87,7 @@ class CollisionDetected(ConditionNode):
                     self.set_output("contact_point", Pose2D(contact.point[0], contact.point[1], 0.0))
                 return SUCCESS
         if source in ("imu", "any"):
-            impact = imu_impact(ctx, self.get_input("imu_window"), self.get_input("imu_threshold"))
+            impact = self._impacts(ctx, self.get_input("imu_window"), self.get_input("imu_threshold"))
             if impact is not None:
                 self.set_output("direction", impact[1])
                 return SUCCESS

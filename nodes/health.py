@@ -35,8 +35,9 @@ class ComponentHealthy(ConditionNode):
 
 
 class ComponentsHealthy(ConditionNode):
-    """SUCCESS if every listed component (all watched ones when empty) is OK; the unhealthy
-    ones are written to ``unhealthy``."""
+    """SUCCESS unless a listed component (all watched ones when empty) has failed, is
+    restarting or is dead (not yet heard from during start-up counts as fine); those are
+    written to ``unhealthy``."""
 
     @classmethod
     def provided_ports(cls):
@@ -45,7 +46,7 @@ class ComponentsHealthy(ConditionNode):
 
     def tick(self):
         sup = self.context.supervisor
-        bad = [n for n in _names(self) if not sup.is_healthy(n)]
+        bad = [n for n in _names(self) if sup.is_failed(n)]
         self.set_output("unhealthy", bad)
         return FAILURE if bad else SUCCESS
 
@@ -67,7 +68,8 @@ class AnyComponentDead(ConditionNode):
 
 class RequestRestarts(SyncActionNode):
     """Ask the supervisor to restart every failed, restartable component (non-blocking; a
-    restart already under way is joined, not repeated). SUCCESS; ``restarting`` lists them."""
+    restart already under way is joined, not repeated; a component whose dependency is down
+    waits for that one). SUCCESS; ``restarting`` lists what is being restarted."""
 
     @classmethod
     def provided_ports(cls):
@@ -79,8 +81,11 @@ class RequestRestarts(SyncActionNode):
         restarting = []
         for name in _names(self):
             health = sup.health(name)
-            if health is Health.RESTARTING or sup.restarting(name) or health is Health.FAILED and sup.request_restart(name) is not None:
-                restarting.append(name)
+            if health is Health.RESTARTING or sup.restarting(name):
+                restarting.append(name)  # already under way: join it
+            elif health is Health.FAILED and not sup.failed_dependencies(name):
+                if sup.request_restart(name) is not None:
+                    restarting.append(name)
         self.set_output("restarting", restarting)
         return SUCCESS
 
@@ -112,7 +117,7 @@ class WaitForHealthy(StatefulActionNode):
     def on_running(self):
         sup = self.context.supervisor
         states = [sup.health(n) for n in _names(self)]
-        if all(s is Health.OK for s in states):
+        if all(s is Health.OK or s is Health.UNKNOWN for s in states):
             return SUCCESS
         if any(s is Health.DEAD for s in states) or self.context.clock() > self._deadline:
             return FAILURE

@@ -153,7 +153,9 @@ def render_png(path: str | Path, world: World, *, occupancy: Any = None, traject
                scan: LaserScan | tuple[LaserScan, Pose2D] | None = None, scan_pose: Pose2D | None = None,
                events: Iterable[Any] | None = None, goals: Mapping[str, Any] | Iterable[Any] | None = None,
                obstacles: Iterable[Any] | None = None, robot: Pose2D | None = None, robot_radius: float = 0.105,
-               scale: float = 50.0, title: str | None = None) -> Path:
+               scale: float = 50.0, title: str | None = None,
+               trajectories: Iterable[tuple[Any, tuple[int, int, int]]] = (),
+               marks: Iterable[tuple[float, float, tuple[int, int, int], str]] = ()) -> Path:
     """Draw the world and the optional layers to ``path`` (PNG); returns the path.
 
     ``occupancy``: a Raster-like grid (see ``_occupancy_parts``). ``trajectory``: (N, 2) x, y,
@@ -161,7 +163,9 @@ def render_png(path: str | Path, world: World, *, occupancy: Any = None, traject
     map-frame pose when it was taken; the lidar mounting offset is ignored), or a
     (scan, pose) pair. ``events``: SimEvents (or dicts with t/kind/data). ``goals``: name ->
     pose mapping, or poses; default: the world's goals. ``obstacles``: extra (run-time)
-    obstacles. ``robot``: draw the robot's body at this pose.
+    obstacles. ``robot``: draw the robot's body at this pose. ``trajectories``: more paths as
+    (trajectory, rgb) pairs (e.g. many runs of one scenario). ``marks``: (x, y, rgb, label)
+    points (e.g. where a fault or a recovery happened).
     """
     c = _Canvas(world, scale)
     if occupancy is not None:
@@ -206,6 +210,19 @@ def render_png(path: str | Path, world: World, *, occupancy: Any = None, traject
         if len(xy):
             c.circle(*xy[0], r_px=4, fill=GREEN)
             c.circle(*xy[-1], r_px=4, fill=RED)
+
+    for extra, colour in trajectories:
+        xy = _traj_xy(extra)
+        if len(xy) > 1:
+            c.draw.line([c.px(px, py) for px, py in xy], fill=colour, width=1)
+        if len(xy):
+            c.circle(*xy[-1], r_px=2.5, fill=colour)
+
+    for mx, my, colour, label in marks:
+        x, y = c.px(mx, my)
+        c.draw.rectangle([x - 3, y - 3, x + 3, y + 3], outline=colour, width=2)
+        if label:
+            c.draw.text((x + 5, y + 2), label, fill=colour)
 
     if scan is not None:
         if isinstance(scan, tuple):

@@ -37,13 +37,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--world", default="apartment", help="apartment | round_obstacles | a world YAML file")
     p.add_argument("--robot", default="burger", help="burger | waffle | rosbot2 | a profile YAML file")
     p.add_argument("--goal", action="append", default=[], metavar="X,Y[,YAW]",
-                   help="goal pose (repeatable) or a goal name of the world; sets {goal} and {goals}")
+                   help="goal pose (repeatable; write --goal=-1,2 for negative x) or a goal name of the "
+                        "world; goals are handed to the tree one after the other")
     p.add_argument("--duration", type=float, default=None, metavar="S",
                    help="stop after S seconds of robot time (default: when the tree completes)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--realtime", action="store_true", help="pace the simulation to the wall clock")
     p.add_argument("--driver", default="sim", choices=["sim", "ros2"])
     p.add_argument("--config", type=Path, default=None, help="runtime configuration (YAML)")
+    p.add_argument("--ros2-config", type=Path, default=None, metavar="FILE",
+                   help="--driver ros2: topics, QoS, domain, Nav2 names, components (YAML, see docs/ros2.md)")
     p.add_argument("--register", action="append", default=[], metavar="MODULE:FUNC",
                    help="extra node registration function called with the factory (repeatable)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -207,11 +210,14 @@ def format_summary(summary: Any, runtime: Any) -> str:
     ]
     if pose is not None:
         lines.append(f"final pose: x={pose.pose.x:.2f} y={pose.pose.y:.2f} yaw={math.degrees(pose.pose.yaw):.0f}deg")
+    outcomes = getattr(s, "goal_outcomes", None)
+    if outcomes:
+        lines.append("goals: " + ", ".join(outcomes))
     return "\n".join(lines)
 
 
 async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any,
-                     registrations: list, show_progress: bool) -> tuple[Any, int]:
+                     registrations: list, show_progress: bool, holder: dict[str, Any]) -> tuple[Any, int]:
     from ..runtime.app import AutonomyRuntime
 
     driver = make_driver(args)
@@ -223,25 +229,75 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any,
     world = getattr(getattr(driver, "sim", None), "world", None)
     goals = [parse_goal(g, world) for g in args.goal]
     bb = runtime.tree.root_blackboard
-    if goals:
-        bb.set("goal", goals[0])
-        bb.set("goals", goals)
     for assignment in args.set:
         key, value = parse_assignment(assignment)
         bb.set(key, value)
     progress = ProgressLine(runtime) if show_progress else None
     await runtime.start()
     progress_task = asyncio.get_running_loop().create_task(progress.run()) if progress else None
+    outcomes: list[str] = []
     try:
-        summary = await runtime.run(duration=args.duration)
+        if goals:
+            await asyncio.wait_for(_send_goals(runtime, goals, outcomes), args.duration)
+            summary = runtime.summary()
+        else:
+            summary = await runtime.run(duration=args.duration)
+    except TimeoutError:
+        summary = runtime.summary()
     finally:
         if progress_task is not None:
             progress_task.cancel()
             progress.maybe_print()
             progress.finish()
+        holder["summary"], holder["runtime"] = runtime.summary(), runtime  # kept if interrupted
         await runtime.stop()
-    code = EXIT_TREE_FAILED if summary.status == "FAILURE" else EXIT_OK
-    return (summary, runtime), code
+    summary.goal_outcomes = outcomes
+    failed = summary.status == "FAILURE" or any(o not in ("SUCCEEDED", "SUCCESS") for o in outcomes)
+    return (summary, runtime), EXIT_TREE_FAILED if failed else EXIT_OK
+
+
+HANDOFF_DONE = ("SUCCEEDED", "ABORTED", "REFUSED")
+
+
+async def _send_goals(runtime: Any, goals: list[Pose2D], outcomes: list[str]) -> None:
+    """Hand the goals to the tree one after the other.
+
+    A tree that runs continuously and uses the goal hand-off (``{goal_status}``, like
+    trees/autonomy.xml) gets each goal when the previous one is SUCCEEDED / ABORTED /
+    REFUSED; a tree that completes per goal (like Nav2's, trees/navigation.xml) is run once
+    per goal.
+    """
+    bb = runtime.tree.root_blackboard
+    handoff = "goal_status" in _port_keys(runtime.tree)
+    for goal in goals:
+        bb.set("goal", goal)
+        bb.set("goals", [goal])
+        if handoff:
+            bb.set("goal_status", "PENDING")
+            while bb.get("goal_status", default="") not in HANDOFF_DONE:
+                if runtime.completed.done():
+                    outcomes.append(runtime.completed.result().name)
+                    return
+                await asyncio.sleep(0.05)
+            outcomes.append(bb.get("goal_status"))
+        else:
+            done = runtime.completed if not runtime.completed.done() else runtime.restart_tree()
+            outcomes.append((await done).name)
+            if goal is not goals[-1]:
+                runtime.restart_tree()
+
+
+def _port_keys(tree: Any) -> set[str]:
+    """Blackboard keys the tree's ports refer to (to see whether it uses the goal hand-off)."""
+    from ..ports import blackboard_key
+
+    keys = set()
+    for node in tree.nodes():
+        for name, raw in {**node.config.input_ports, **node.config.output_ports}.items():
+            key = blackboard_key(raw, name) if isinstance(raw, str) else None
+            if key:
+                keys.add(key.lstrip("@"))
+    return keys
 
 
 def run(args: argparse.Namespace) -> int:
@@ -264,8 +320,16 @@ def run(args: argparse.Namespace) -> int:
         registrations = load_registrations(args.register)
         show_progress = not args.no_progress and not args.log_json and sys.stderr.isatty()
         virtual = args.driver == "sim" and not args.realtime
-        (summary, runtime), code = run_loop(_run_async(args, tree_path, config, registrations, show_progress),
-                                            virtual=virtual)
+        holder: dict[str, Any] = {}
+        try:
+            (summary, runtime), code = run_loop(
+                _run_async(args, tree_path, config, registrations, show_progress, holder), virtual=virtual)
+        except KeyboardInterrupt:
+            if "summary" not in holder:
+                print("interrupted", file=sys.stderr)
+                return 130
+            summary, runtime, code = holder["summary"], holder["runtime"], 130
+            print("interrupted", file=sys.stderr)
     except UsageError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE

@@ -59,6 +59,7 @@ class RunSummary:
     supervisor_events: int = 0
     gate_switches: int = 0
     estop_reasons: list[str] = field(default_factory=list)
+    goal_outcomes: list[str] = field(default_factory=list)
 
     @property
     def real_time_factor(self) -> float:

@@ -36,6 +36,8 @@ class SupervisorConfig(_Model):
     max_failed_restarts: int = Field(2, ge=1, description="then the component is dead")
     restart_timeout: float = Field(5.0, gt=0, description="a restart that takes longer failed")
     recovery_timeout: float = Field(2.0, gt=0, description="after a restart, data must flow within this")
+    dependency_grace: float = Field(1.0, ge=0, description="after a dependency recovers, give the components "
+                                                           "that need it this long to recover by themselves")
     components: dict[str, ComponentWatch] = Field(default_factory=dict)
 
 

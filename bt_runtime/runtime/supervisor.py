@@ -237,11 +237,21 @@ class SystemSupervisor:
         return self.health(name) in (Health.FAILED, Health.RESTARTING, Health.DEAD)
 
     def failed_dependencies(self, name: str) -> list[str]:
-        """The components ``name`` depends on that are not OK (restart those first)."""
+        """The components ``name`` depends on that are not OK, or recovered less than
+        ``dependency_grace`` s ago (the dependent usually comes back by itself then)."""
         record = self.components.get(name)
         if record is None:
             return []
-        return [d for d in record.depends_on if d in self.components and self.health(d) is not Health.OK]
+        now = self.clock()
+        grace = self.config.dependency_grace
+        blocking = []
+        for dep in record.depends_on:
+            dep_record = self.components.get(dep)
+            if dep_record is None:
+                continue
+            if self.health(dep) is not Health.OK or now - dep_record.state_since < grace:
+                blocking.append(dep)
+        return blocking
 
     def unhealthy(self) -> list[str]:
         return [n for n in self.components if self.health(n) is not Health.OK]
@@ -291,6 +301,11 @@ class SystemSupervisor:
         record = self.components[name]
         if record.state is Health.DEAD:
             return False
+        if record.state is Health.OK and self.health(name) is Health.FAILED:
+            # its timeout expired but the watchdog has not run yet: record the failure first
+            record.failures += 1
+            self._set_state(record, Health.FAILED,
+                            f"silent for {self.clock() - record.last_seen:.2f} s (timeout {record.timeout} s)")
         cfg = self.config
         record.restarts += 1
         started = self.clock()

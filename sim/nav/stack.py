@@ -137,6 +137,7 @@ class NavHandle:
         self.preempted = False
         self.cancel_requested = False
         self.start_time = 0.0
+        self._path_update: np.ndarray | None = None
 
     def done(self) -> bool:
         return self._task is not None and self._task.done()
@@ -155,6 +156,19 @@ class NavHandle:
         if self._task is not None and not self._task.done():
             self.cancel_requested = True
             self._task.cancel()
+
+    def update_path(self, path: Path | np.ndarray) -> bool:
+        """Give a running ``follow_path`` a new path without restarting it (Nav2's controller
+        server accepting a preempting FollowPath goal: ``updateGlobalPath`` resets the goal
+        checker, not the progress checker). Applied at the next control cycle. False if this
+        is not a running follow_path or the path is empty (the caller may send a new goal)."""
+        if self.kind != "follow_path" or self._task is None or self._task.done():
+            return False
+        pts = path.points if isinstance(path, Path) else np.asarray(path)
+        if pts is None or len(pts) == 0:
+            return False
+        self._path_update = np.asarray(pts, dtype=float)
+        return True
 
     def _preempt(self) -> None:
         if self._task is not None and not self._task.done():
@@ -679,6 +693,11 @@ class NavStack:
                 now = loop.time()
                 if comp.failing:
                     raise _Finish(_abort(E.NO_VALID_CONTROL, f"{CONTROLLER} fails every request (fault)"))
+                update = handle._path_update
+                if update is not None:  # follow_path preempted by a new path (Nav2 updateGlobalPath)
+                    handle._path_update = None
+                    ctrl.set_plan(update)
+                    self.goal_checker.reset()
                 age = self._pose_age(now)
                 if age > p.pose_abort_timeout:
                     raise _Finish(_abort(E.CONTROLLER_TF_ERROR,

@@ -1,0 +1,188 @@
+"""The ROS 2 driver's configuration: one pydantic model, loaded from one YAML file.
+
+Every name is a ROS name (relative names go below ``namespace``). The defaults match the
+names ``sim-robot`` uses and a TurtleBot3 / ROSbot with Nav2 (Jazzy) and AMCL.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class Qos(_Model):
+    reliability: Literal["reliable", "best_effort"] = "best_effort"
+    durability: Literal["volatile", "transient_local"] = "volatile"
+    depth: int = Field(5, ge=1, le=1000)
+
+
+class TopicConfig(_Model):
+    name: str
+    qos: Qos = Field(default_factory=Qos, description="reader QoS; best effort + volatile matches "
+                                                          "every writer, reliable or not")
+
+
+class BumperConfig(TopicConfig):
+    type: Literal["bool", "vector3"] = Field(
+        "bool", description="std_msgs/Bool (in contact or not), or geometry_msgs/Vector3Stamped: "
+                            "x, y = direction of the contact in the base frame, z = impulse (N*s); "
+                            "a zero vector is no contact")
+
+
+class CmdVelConfig(_Model):
+    name: str = "cmd_vel"
+    stamped: bool = Field(False, description="publish geometry_msgs/TwistStamped (Jazzy's "
+                                             "enable_stamped_cmd_vel) instead of Twist")
+    frame_id: str = "base_link"
+    qos: Qos = Field(default_factory=lambda: Qos(reliability="reliable", depth=10))
+
+
+class NavCmdVelConfig(TopicConfig):
+    stamped: bool = False
+
+
+class Topics(_Model):
+    scan: TopicConfig = Field(default_factory=lambda: TopicConfig(name="scan"))
+    imu: TopicConfig | None = Field(default_factory=lambda: TopicConfig(name="imu"))
+    odom: TopicConfig | None = Field(default_factory=lambda: TopicConfig(name="odom"))
+    pose: TopicConfig | None = Field(default_factory=lambda: TopicConfig(name="amcl_pose"),
+                                     description="geometry_msgs/PoseWithCovarianceStamped (map frame)")
+    battery: TopicConfig | None = Field(default_factory=lambda: TopicConfig(name="battery_state"))
+    bumper: BumperConfig | None = Field(default_factory=lambda: BumperConfig(name="bumper"))
+    cmd_vel: CmdVelConfig = Field(default_factory=CmdVelConfig)
+    nav_cmd_vel: NavCmdVelConfig | None = Field(
+        default_factory=lambda: NavCmdVelConfig(name="cmd_vel_nav"),
+        description="where Nav2's last velocity stage publishes (remapped away from cmd_vel)")
+
+
+class Navigation(_Model):
+    enabled: bool = True
+    navigate_to_pose: str = "navigate_to_pose"
+    compute_path_to_pose: str = "compute_path_to_pose"
+    follow_path: str = "follow_path"
+    spin: str = "spin"
+    back_up: str = "backup"
+    drive_on_heading: str = "drive_on_heading"
+    wait: str = "wait"
+    clear_global_costmap: str = "/global_costmap/clear_entirely_global_costmap"
+    clear_local_costmap: str = "/local_costmap/clear_entirely_local_costmap"
+    global_costmap: str | None = Field("/global_costmap/costmap", description="nav_msgs/OccupancyGrid "
+                                       "used for is_path_valid / path_clearance (None: not used)")
+    speed_limit: str | None = Field("speed_limit", description="nav2_msgs/SpeedLimit topic of the "
+                                    "controller server (the gate's speed limit is passed on); None = off")
+    map_frame: str = "map"
+    server_timeout: float = Field(5.0, gt=0, description="wait this long for an action server")
+    service_timeout: float = Field(2.0, gt=0)
+    server_gone_after: float = Field(1.0, gt=0, description="a goal whose server vanished for this "
+                                     "long ends ABORTED")
+
+
+class Component(_Model):
+    kind: str = "sensor"
+    heartbeat: Literal["streams", "lifecycle"] = Field(
+        "streams", description="what proves it alive: data on its streams, or (for servers such as "
+                               "Nav2's) its lifecycle node answering get_state with 'active', polled "
+                               "at lifecycle.poll_hz (its stream is then lifecycle/<name>)")
+    streams: list[str] = Field(default_factory=list)
+    rate_hz: float = Field(0.0, ge=0)
+    lifecycle_node: str | None = Field(None, description="ROS node offering <node>/change_state and "
+                                       "<node>/get_state; None = watched only, not restartable")
+    depends_on: list[str] = Field(default_factory=list, description="components it cannot work without "
+                                  "(the supervisor restarts those first)")
+
+
+def _default_components() -> dict[str, Component]:
+    return {
+        "lidar": Component(streams=["scan"], rate_hz=10.0, lifecycle_node="lidar"),
+        "imu": Component(streams=["imu"], rate_hz=50.0, lifecycle_node="imu"),
+        "odom": Component(streams=["odom"], rate_hz=20.0, lifecycle_node="odom"),
+        "bumper": Component(streams=["bumper"], rate_hz=10.0, lifecycle_node="bumper"),
+        "battery": Component(streams=["battery"], rate_hz=1.0, lifecycle_node="battery"),
+        "localization": Component(kind="localization", streams=["pose"], rate_hz=10.0,
+                                  lifecycle_node="localization", depends_on=["odom"]),
+        "planner_server": Component(kind="navigation", heartbeat="lifecycle", lifecycle_node="planner_server"),
+        "controller_server": Component(kind="navigation", heartbeat="lifecycle", lifecycle_node="controller_server"),
+        "behavior_server": Component(kind="navigation", heartbeat="lifecycle", lifecycle_node="behavior_server"),
+    }
+
+
+class Validation(_Model):
+    """Limits beyond which a message is dropped (and counted in ``driver.dropped``)."""
+
+    max_scan_beams: int = Field(20000, gt=0)
+    max_nan_fraction: float = Field(0.5, ge=0, le=1, description="scans with more NaN ranges are dropped")
+    max_range: float = Field(1000.0, gt=0)
+    max_speed: float = Field(20.0, gt=0, description="m/s, odometry and velocity commands")
+    max_yaw_rate: float = Field(50.0, gt=0)
+    max_accel: float = Field(500.0, gt=0)
+    max_position: float = Field(1e5, gt=0)
+    max_voltage: float = Field(1000.0, gt=0)
+
+
+class RobotConfig(_Model):
+    """What the autonomy layer may know about the robot (``RobotInfo``); defaults: TurtleBot3
+    burger. ``null`` for the whole section: the runtime's defaults."""
+
+    radius: float = Field(0.105, gt=0)
+    max_linear: float = Field(0.22, gt=0)
+    max_angular: float = Field(2.84, gt=0)
+    capacity_ah: float = Field(1.8, gt=0)
+    voltage_nominal: float = Field(11.1, gt=0)
+    idle_power_w: float = Field(6.0, ge=0)
+    k_linear: float = Field(12.0, ge=0, description="W per m/s")
+    k_angular: float = Field(1.0, ge=0, description="W per rad/s")
+
+
+class LifecycleConfig(_Model):
+    transition_timeout: float = Field(3.0, gt=0, description="per change_state call (activate may take "
+                                      "as long as the driver needs to start)")
+    poll_hz: float = Field(2.0, gt=0, le=50, description="get_state polling of heartbeat: lifecycle components")
+
+
+class Ros2Config(_Model):
+    """The whole file. ``components`` replaces the default set when given."""
+
+    domain_id: int = Field(0, ge=0, le=232)
+    namespace: str = ""
+    cyclonedds_uri: str | None = Field(None, description="Cyclone DDS XML or file:// URI; default: "
+                                       "the CYCLONEDDS_URI environment variable")
+    loopback_only: bool = Field(False, description="use 127.0.0.1 only (a robot on this machine)")
+    topics: Topics = Field(default_factory=Topics)
+    navigation: Navigation = Field(default_factory=Navigation)
+    components: dict[str, Component] = Field(default_factory=_default_components)
+    validation: Validation = Field(default_factory=Validation)
+    lifecycle: LifecycleConfig = Field(default_factory=LifecycleConfig)
+    robot: RobotConfig | None = Field(default_factory=RobotConfig)
+
+    @model_validator(mode="after")
+    def _lifecycle_heartbeats(self) -> Ros2Config:
+        for name, comp in self.components.items():
+            if comp.heartbeat == "lifecycle":
+                if not comp.lifecycle_node:
+                    raise ValueError(f"components.{name}: heartbeat 'lifecycle' needs a lifecycle_node")
+                comp.streams = [f"lifecycle/{name}"]
+                if comp.rate_hz == 0:
+                    comp.rate_hz = self.lifecycle.poll_hz
+        return self
+
+    @classmethod
+    def load(cls, path: str | Path) -> Ros2Config:
+        import yaml
+
+        path = Path(path)
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+        except FileNotFoundError:
+            raise ValueError(f"ROS 2 config file not found: {path}") from None
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{path}: {exc}") from None
+        try:
+            return cls.model_validate(data)
+        except ValidationError as exc:
+            raise ValueError(f"{path}: {exc}") from None

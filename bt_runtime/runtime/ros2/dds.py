@@ -1,0 +1,589 @@
+"""ROS 2 over plain DDS: topics, services and actions as rmw_cyclonedds and rcl_action lay them out.
+
+* A ROS topic ``/a/b`` is the DDS topic ``rt/a/b``; a service ``/s`` is the pair
+  ``rq/sRequest`` (client -> server) and ``rr/sReply``; an action ``/x`` is the services
+  ``/x/_action/send_goal``, ``/x/_action/get_result``, ``/x/_action/cancel_goal`` and the
+  topics ``/x/_action/feedback`` and ``/x/_action/status`` (transient local, depth 1).
+* Service samples carry ``{uint64 guid, int64 seq}`` before the fields (``idl.service_wire``);
+  the client puts its request writer's instance handle in ``guid`` and keeps only replies that
+  carry it back. Client and server mark their endpoints with ``clientid=...;`` /
+  ``serviceid=...;`` user data, as rmw_cyclonedds does: a ROS 2 service only answers once it
+  has matched the reply reader of the client that wrote the request.
+
+Threading: Cyclone calls the listeners on its own receive threads. A listener only takes the
+samples (deserialising them), stamps them with the loop clock and hands them to the event loop
+with ``loop.call_soon_threadsafe``; everything else (user callbacks, futures) runs on the loop.
+The loop never blocks on DDS: writes are non-blocking for best-effort topics and bounded by
+``max_blocking_time`` for reliable ones (which only blocks when a reader's history is full).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+import os
+import uuid as uuidlib
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from typing import Any
+
+import structlog
+from cyclonedds.core import Listener, Policy, Qos
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.internal import InvalidSample
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
+from . import idl
+
+log = structlog.get_logger("bt_runtime.ros2.dds")
+
+
+# ---------------------------------------------------------------------------------------------
+# names and QoS
+# ---------------------------------------------------------------------------------------------
+
+def fq_name(name: str, namespace: str = "") -> str:
+    """A fully qualified ROS name: relative names go below ``namespace`` (default ``/``)."""
+    if name.startswith("/"):
+        return name.rstrip("/") or "/"
+    ns = "/" + namespace.strip("/") if namespace.strip("/") else ""
+    return f"{ns}/{name}".rstrip("/")
+
+
+@dataclass(frozen=True)
+class QosProfile:
+    """The ROS QoS settings that matter on the wire."""
+
+    reliable: bool = True
+    transient_local: bool = False
+    depth: int = 10
+
+    def to_dds(self, *, user_data: str | None = None, writer: bool = False) -> Qos:
+        policies: list[Any] = [
+            (Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=5)) if self.reliable
+             else Policy.Reliability.BestEffort),
+            Policy.Durability.TransientLocal if self.transient_local else Policy.Durability.Volatile,
+            Policy.History.KeepLast(self.depth),
+            Policy.WriterDataLifecycle(autodispose=False),
+        ]
+        if writer and self.transient_local:
+            policies.append(Policy.DurabilityService(cleanup_delay=0, history=Policy.History.KeepLast(self.depth),
+                                                     max_samples=-1, max_instances=-1,
+                                                     max_samples_per_instance=-1))
+        if user_data:
+            policies.append(Policy.Userdata(data=user_data.encode()))
+        return Qos(*policies)
+
+
+SENSOR_DATA = QosProfile(reliable=False, depth=5)        # rmw_qos_profile_sensor_data
+DEFAULT = QosProfile(reliable=True, depth=10)            # rmw_qos_profile_default
+SERVICES = QosProfile(reliable=True, depth=10)           # rmw_qos_profile_services_default
+ACTION_STATUS = QosProfile(reliable=True, transient_local=True, depth=1)  # rcl_action status
+LATCHED = QosProfile(reliable=True, transient_local=True, depth=1)
+
+
+def loopback_config(domain_id: int | None = None, lease_duration: float = 2.0) -> str:
+    """A Cyclone DDS configuration that keeps all traffic on 127.0.0.1 (unicast discovery).
+    ``lease_duration``: how soon peers notice that this process died (Cyclone's default 10 s)."""
+    dom = "any" if domain_id is None else str(domain_id)
+    return ("<CycloneDDS><Domain id=\"" + dom + "\"><General><Interfaces>"
+            "<NetworkInterface address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast>"
+            "</General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
+            "<MaxAutoParticipantIndex>40</MaxAutoParticipantIndex>"
+            f"<LeaseDuration>{lease_duration:g} s</LeaseDuration>"
+            "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>")
+
+
+# ---------------------------------------------------------------------------------------------
+# the node: one participant, readers and writers
+# ---------------------------------------------------------------------------------------------
+
+class DdsNode:
+    """One DDS participant on one domain, delivering samples on one asyncio loop."""
+
+    _ids = itertools.count(1)
+
+    def __init__(self, domain_id: int = 0, *, loop: asyncio.AbstractEventLoop | None = None,
+                 namespace: str = "", cyclonedds_uri: str | None = None):
+        if cyclonedds_uri:
+            os.environ["CYCLONEDDS_URI"] = cyclonedds_uri  # read when the domain is first created
+        self.loop = loop or asyncio.get_running_loop()
+        self.domain_id = domain_id
+        self.namespace = namespace
+        self.participant = DomainParticipant(domain_id)
+        self._topics: dict[str, Topic] = {}
+        self._readers: list[Reader] = []
+        self._writers: list[DataWriter] = []
+        self._uid = uuidlib.uuid4().bytes
+        self.closed = False
+
+    # -- plumbing ------------------------------------------------------------------------------
+    def topic(self, dds_name: str, data_type: type) -> Topic:
+        topic = self._topics.get(dds_name)
+        if topic is None:
+            topic = Topic(self.participant, dds_name, data_type)
+            self._topics[dds_name] = topic
+        elif topic.data_type is not data_type:
+            raise ValueError(f"DDS topic {dds_name} already has type {topic.data_type.__name__}")
+        return topic
+
+    def fq(self, name: str) -> str:
+        return fq_name(name, self.namespace)
+
+    def unique_id(self) -> str:
+        """A client/service id in rmw_cyclonedds's style (16 bytes, dotted)."""
+        raw = self._uid[:12] + next(self._ids).to_bytes(4, "big")
+        return ".".join(f"{b:02x}" for b in raw)
+
+    def reader(self, dds_name: str, data_type: type, qos: QosProfile,
+               on_samples: Callable[[list, float], None], *, user_data: str | None = None) -> Reader:
+        reader = Reader(self, dds_name, data_type, qos, on_samples, user_data=user_data)
+        self._readers.append(reader)
+        return reader
+
+    def writer(self, dds_name: str, data_type: type, qos: QosProfile, *, user_data: str | None = None) -> DataWriter:
+        writer = DataWriter(self.participant, self.topic(dds_name, data_type),
+                            qos=qos.to_dds(user_data=user_data, writer=True))
+        self._writers.append(writer)
+        return writer
+
+    # -- ROS-level helpers ------------------------------------------------------------------------
+    def subscription(self, name: str, data_type: type, qos: QosProfile,
+                     on_samples: Callable[[list, float], None]) -> Reader:
+        return self.reader("rt" + self.fq(name), data_type, qos, on_samples)
+
+    def publisher(self, name: str, data_type: type, qos: QosProfile = DEFAULT) -> DataWriter:
+        return self.writer("rt" + self.fq(name), data_type, qos)
+
+    def close(self) -> None:
+        """Delete the participant (and with it every reader and writer)."""
+        if self.closed:
+            return
+        self.closed = True
+        for reader in self._readers:
+            reader.closed = True
+        with contextlib.suppress(Exception):
+            self.participant.__del__()
+
+
+class Reader:
+    """A DDS reader whose samples arrive on the loop as ``on_samples(samples, receive_time)``.
+
+    ``receive_time`` is ``loop.time()`` read on the receiving thread. Samples that fail to
+    deserialise are dropped and counted in ``malformed``.
+    """
+
+    def __init__(self, node: DdsNode, dds_name: str, data_type: type, qos: QosProfile,
+                 on_samples: Callable[[list, float], None], *, user_data: str | None = None):
+        self.node = node
+        self.name = dds_name
+        self.on_samples = on_samples
+        self.received = 0
+        self.malformed = 0
+        self.closed = False
+        loop = node.loop
+        self._loop = loop
+        self._listener = Listener(on_data_available=self._on_data_available)
+        self.reader = DataReader(node.participant, node.topic(dds_name, data_type),
+                                 qos=qos.to_dds(user_data=user_data), listener=self._listener)
+
+    def _on_data_available(self, reader: DataReader) -> None:  # a Cyclone thread
+        if self.closed:
+            return
+        while True:
+            try:
+                samples = reader.take(N=32)
+            except Exception:  # a sample that does not deserialise: drop it, count it
+                self.malformed += 1
+                continue
+            if not samples:
+                return
+            now = self._loop.time()
+            valid = [s for s in samples if not isinstance(s, InvalidSample)]
+            if valid:
+                try:
+                    self._loop.call_soon_threadsafe(self._deliver, valid, now)
+                except RuntimeError:  # the loop is closed
+                    self.closed = True
+                    return
+
+    def _deliver(self, samples: list, now: float) -> None:  # on the loop
+        if self.closed:
+            return
+        self.received += len(samples)
+        try:
+            self.on_samples(samples, now)
+        except Exception:
+            log.exception("dds_callback_failed", topic=self.name)
+
+    def matched_writers(self) -> int:
+        try:
+            return len(self.reader.get_matched_publications())
+        except Exception:
+            return 0
+
+
+# ---------------------------------------------------------------------------------------------
+# services
+# ---------------------------------------------------------------------------------------------
+
+class ServiceError(RuntimeError):
+    """A service call that got no answer (server absent or too slow)."""
+
+
+class ServiceClient:
+    """A ROS 2 service client (``rq/<name>Request`` / ``rr/<name>Reply``)."""
+
+    def __init__(self, node: DdsNode, name: str, request_type: type, response_type: type,
+                 qos: QosProfile = SERVICES):
+        self.node = node
+        self.name = node.fq(name)
+        self.request_wire = idl.service_wire(request_type)
+        self.response_type = response_type
+        user_data = f"clientid={node.unique_id()};"
+        self.writer = node.writer(f"rq{self.name}Request", self.request_wire, qos, user_data=user_data)
+        self.reader = node.reader(f"rr{self.name}Reply", idl.service_wire(response_type), qos,
+                                  self._on_replies, user_data=user_data)
+        self.guid = self.writer.get_instance_handle() & 0xFFFF_FFFF_FFFF_FFFF  # uint64 on the wire
+        self._seq = itertools.count(1)
+        self._pending: dict[int, asyncio.Future] = {}
+
+    def ready(self) -> bool:
+        """Both directions matched with a server."""
+        try:
+            return bool(self.writer.get_matched_subscriptions()) and self.reader.matched_writers() > 0
+        except Exception:
+            return False
+
+    async def wait_ready(self, timeout: float) -> bool:
+        deadline = self.node.loop.time() + timeout
+        while not self.ready():
+            if self.node.loop.time() >= deadline:
+                return False
+            await asyncio.sleep(0.01)
+        return True
+
+    def _on_replies(self, samples: list, _now: float) -> None:
+        for sample in samples:
+            if sample.guid != self.guid:
+                continue  # another client's reply
+            fut = self._pending.pop(sample.seq, None)
+            if fut is not None and not fut.done():
+                fut.set_result(idl.unwrap(sample))
+
+    async def call(self, request: Any, timeout: float = 2.0) -> Any:
+        """Send ``request`` (the body type) and return the response body; ServiceError on
+        time-out (including the time to discover the server)."""
+        loop = self.node.loop
+        deadline = loop.time() + timeout
+        if not self.ready() and not await self.wait_ready(timeout):
+            raise ServiceError(f"service {self.name} not available")
+        seq = next(self._seq)
+        fut = loop.create_future()
+        self._pending[seq] = fut
+        try:
+            self.writer.write(idl.wrap(self.guid, seq, request))
+            return await asyncio.wait_for(fut, max(0.0, deadline - loop.time()))
+        except TimeoutError:
+            raise ServiceError(f"service {self.name}: no reply within {timeout} s") from None
+        finally:
+            self._pending.pop(seq, None)
+
+
+class ServiceServer:
+    """A ROS 2 service server; ``handler(request) -> response`` may be a coroutine function
+    (returning None sends no reply). Requests are served concurrently, each in its own task."""
+
+    def __init__(self, node: DdsNode, name: str, request_type: type, response_type: type,
+                 handler: Callable[[Any], Any], qos: QosProfile = SERVICES):
+        self.node = node
+        self.name = node.fq(name)
+        self.handler = handler
+        self.response_wire = idl.service_wire(response_type)
+        user_data = f"serviceid={node.unique_id()};"
+        self.writer = node.writer(f"rr{self.name}Reply", self.response_wire, qos, user_data=user_data)
+        self.reader = node.reader(f"rq{self.name}Request", idl.service_wire(request_type), qos,
+                                  self._on_requests, user_data=user_data)
+        self._tasks: set[asyncio.Task] = set()
+        self.served = 0
+
+    def _on_requests(self, samples: list, _now: float) -> None:
+        for sample in samples:
+            task = self.node.loop.create_task(self._serve(sample))
+            self._tasks.add(task)
+            task.add_done_callback(self._tasks.discard)
+
+    async def _serve(self, sample: Any) -> None:
+        try:
+            response = self.handler(idl.unwrap(sample))
+            if isinstance(response, Awaitable):
+                response = await response
+        except Exception:
+            log.exception("service_handler_failed", service=self.name)
+            return
+        if self.node.closed or response is None:  # None: no reply (a hung server)
+            return
+        self.writer.write(idl.wrap(sample.guid, sample.seq, response))
+        self.served += 1
+
+    def close(self) -> None:
+        for task in list(self._tasks):
+            task.cancel()
+
+
+# ---------------------------------------------------------------------------------------------
+# actions
+# ---------------------------------------------------------------------------------------------
+
+S = idl.GoalStatus
+TERMINAL = (S.STATUS_SUCCEEDED, S.STATUS_CANCELED, S.STATUS_ABORTED)
+
+
+def new_goal_id() -> bytes:
+    return uuidlib.uuid4().bytes
+
+
+def action_names(name: str) -> dict[str, str]:
+    base = name.rstrip("/") + "/_action/"
+    return {k: base + k for k in ("send_goal", "get_result", "cancel_goal", "feedback", "status")}
+
+
+class ActionClient:
+    """A ROS 2 action client (rcl_action layout) for one action type."""
+
+    def __init__(self, node: DdsNode, name: str, types: idl.ActionTypes):
+        self.node = node
+        self.name = node.fq(name)
+        self.types = types
+        n = action_names(self.name)
+        self.send_goal_client = ServiceClient(node, n["send_goal"], types.SendGoal_Request, types.SendGoal_Response)
+        self.result_client = ServiceClient(node, n["get_result"], types.GetResult_Request, types.GetResult_Response)
+        self.cancel_client = ServiceClient(node, n["cancel_goal"], idl.CancelGoal_Request, idl.CancelGoal_Response)
+        self._feedback_cbs: dict[bytes, Callable[[Any], None]] = {}
+        self.statuses: dict[bytes, int] = {}
+        self.feedback_reader = node.reader("rt" + n["feedback"], types.FeedbackMessage, DEFAULT, self._on_feedback)
+        self.status_reader = node.reader("rt" + n["status"], idl.GoalStatusArray, ACTION_STATUS, self._on_status)
+
+    def server_ready(self) -> bool:
+        return self.send_goal_client.ready() and self.result_client.ready() and self.cancel_client.ready()
+
+    def server_present(self) -> bool:
+        """Any of the server's endpoints still matched (false once its process is gone)."""
+        return self.status_reader.matched_writers() > 0 or self.result_client.reader.matched_writers() > 0
+
+    async def wait_ready(self, timeout: float) -> bool:
+        deadline = self.node.loop.time() + timeout
+        while not self.server_ready():
+            if self.node.loop.time() >= deadline:
+                return False
+            await asyncio.sleep(0.01)
+        return True
+
+    def _on_feedback(self, samples: list, _now: float) -> None:
+        for sample in samples:
+            cb = self._feedback_cbs.get(bytes(sample.goal_id.uuid))
+            if cb is not None:
+                cb(sample.feedback)
+
+    def _on_status(self, samples: list, _now: float) -> None:
+        for sample in samples:
+            for st in sample.status_list:
+                self.statuses[bytes(st.goal_info.goal_id.uuid)] = st.status
+
+    async def send_goal(self, goal: Any, *, feedback: Callable[[Any], None] | None = None,
+                        timeout: float = 2.0) -> tuple[bytes, bool]:
+        goal_id = new_goal_id()
+        if feedback is not None:
+            self._feedback_cbs[goal_id] = feedback
+        if not self.server_ready() and not await self.wait_ready(timeout):
+            self._feedback_cbs.pop(goal_id, None)
+            raise ServiceError(f"action server {self.name} not available")
+        request = self.types.SendGoal_Request(goal_id=idl.UUID(uuid=goal_id), goal=goal)
+        response = await self.send_goal_client.call(request, timeout)
+        if not response.accepted:
+            self._feedback_cbs.pop(goal_id, None)
+        return goal_id, bool(response.accepted)
+
+    async def get_result(self, goal_id: bytes, *, poll: float = 0.25, gone_after: float = 1.0) -> tuple[int, Any]:
+        """Wait for the goal's result. If the server vanishes (no endpoint matched for
+        ``gone_after`` s) the goal ends ABORTED with ``None`` as result."""
+        loop = self.node.loop
+        client = self.result_client
+        if not client.ready():
+            await client.wait_ready(gone_after)
+        seq = next(client._seq)
+        fut = loop.create_future()
+        client._pending[seq] = fut
+        absent_since: float | None = None
+        try:
+            client.writer.write(idl.wrap(client.guid, seq, self.types.GetResult_Request(goal_id=idl.UUID(uuid=goal_id))))
+            while True:
+                done, _ = await asyncio.wait({fut}, timeout=poll)
+                if done:
+                    response = fut.result()
+                    return int(response.status), response.result
+                if self.server_present():
+                    absent_since = None
+                else:
+                    absent_since = absent_since or loop.time()
+                    if loop.time() - absent_since >= gone_after:
+                        return S.STATUS_ABORTED, None
+        finally:
+            client._pending.pop(seq, None)
+            self._feedback_cbs.pop(goal_id, None)
+
+    async def cancel(self, goal_id: bytes | None = None, timeout: float = 2.0) -> int:
+        """Cancel one goal, or (``None``) every goal of the server; returns the return code."""
+        info = idl.GoalInfo(goal_id=idl.UUID(uuid=goal_id or bytes(16)))
+        response = await self.cancel_client.call(idl.CancelGoal_Request(goal_info=info), timeout)
+        return int(response.return_code)
+
+
+class _ServerGoal:
+    __slots__ = ("goal_id", "stamp", "status", "task", "result", "done")
+
+    def __init__(self, goal_id: bytes, stamp: idl.Time, done: asyncio.Future):
+        self.goal_id = goal_id
+        self.stamp = stamp
+        self.status = S.STATUS_ACCEPTED
+        self.task: asyncio.Task | None = None
+        self.result: Any = None
+        self.done = done
+
+
+class GoalContext:
+    """What an action server's ``execute`` sees: the goal, feedback, cancel state."""
+
+    def __init__(self, server: ActionServer, goal: _ServerGoal):
+        self._server = server
+        self._goal = goal
+
+    @property
+    def goal_id(self) -> bytes:
+        return self._goal.goal_id
+
+    @property
+    def cancel_requested(self) -> bool:
+        return self._goal.status == S.STATUS_CANCELING
+
+    def publish_feedback(self, feedback: Any) -> None:
+        self._server.publish_feedback(self._goal.goal_id, feedback)
+
+
+class ActionServer:
+    """A ROS 2 action server. ``execute(goal, ctx) -> (status, result)`` runs as a task per
+    accepted goal; a cancel request cancels that task (the coroutine should then return
+    ``(STATUS_CANCELED, result)`` from its ``CancelledError`` handler, or it ends CANCELED with
+    a default result). Terminal goals are kept (for ``get_result``) up to ``keep`` goals."""
+
+    def __init__(self, node: DdsNode, name: str, types: idl.ActionTypes,
+                 execute: Callable[[Any, GoalContext], Awaitable[tuple[int, Any]]], *, keep: int = 100):
+        self.node = node
+        self.name = node.fq(name)
+        self.types = types
+        self.execute = execute
+        self.keep = keep
+        self.goals: dict[bytes, _ServerGoal] = {}
+        n = action_names(self.name)
+        self.send_goal_server = ServiceServer(node, n["send_goal"], types.SendGoal_Request,
+                                              types.SendGoal_Response, self._on_send_goal)
+        self.result_server = ServiceServer(node, n["get_result"], types.GetResult_Request,
+                                           types.GetResult_Response, self._on_get_result)
+        self.cancel_server = ServiceServer(node, n["cancel_goal"], idl.CancelGoal_Request,
+                                           idl.CancelGoal_Response, self._on_cancel)
+        self.feedback_writer = node.writer("rt" + n["feedback"], types.FeedbackMessage, DEFAULT)
+        self.status_writer = node.writer("rt" + n["status"], idl.GoalStatusArray, ACTION_STATUS)
+
+    def _now(self) -> idl.Time:
+        return idl.Time.now()
+
+    def _on_send_goal(self, request: Any) -> Any:
+        goal_id = bytes(request.goal_id.uuid)
+        loop = self.node.loop
+        goal = _ServerGoal(goal_id, self._now(), loop.create_future())
+        self.goals[goal_id] = goal
+        goal.task = loop.create_task(self._run(goal, request.goal), name=f"action:{self.name}")
+        self._prune()
+        self.publish_status()
+        return self.types.SendGoal_Response(accepted=True, stamp=goal.stamp)
+
+    async def _run(self, goal: _ServerGoal, goal_msg: Any) -> None:
+        goal.status = S.STATUS_EXECUTING
+        self.publish_status()
+        ctx = GoalContext(self, goal)
+        try:
+            status, result = await self.execute(goal_msg, ctx)
+        except asyncio.CancelledError:
+            status, result = S.STATUS_CANCELED, self.types.Result()
+        except Exception as exc:
+            log.exception("action_execute_failed", action=self.name)
+            status, result = S.STATUS_ABORTED, self.types.Result()
+            if hasattr(result, "error_msg"):
+                result.error_msg = f"internal error: {exc!r}"
+        goal.status = status
+        goal.result = result
+        if not goal.done.done():
+            goal.done.set_result(None)
+        self.publish_status()
+
+    async def _on_get_result(self, request: Any) -> Any:
+        goal = self.goals.get(bytes(request.goal_id.uuid))
+        if goal is None:
+            return self.types.GetResult_Response(status=S.STATUS_UNKNOWN, result=self.types.Result())
+        await asyncio.shield(goal.done)
+        return self.types.GetResult_Response(status=goal.status, result=goal.result)
+
+    def _on_cancel(self, request: Any) -> Any:
+        target = bytes(request.goal_info.goal_id.uuid)
+        stamp = request.goal_info.stamp
+        cancel_all = target == bytes(16)
+        canceling = []
+        for goal in self.goals.values():
+            if goal.status in TERMINAL:
+                continue
+            if (cancel_all and (stamp.sec == 0 and stamp.nanosec == 0 or
+                                (goal.stamp.sec, goal.stamp.nanosec) <= (stamp.sec, stamp.nanosec))) \
+                    or goal.goal_id == target:
+                goal.status = S.STATUS_CANCELING
+                if goal.task is not None:
+                    goal.task.cancel()
+                canceling.append(idl.GoalInfo(goal_id=idl.UUID(uuid=goal.goal_id), stamp=goal.stamp))
+        if canceling:
+            code = idl.CancelGoal_Response.ERROR_NONE
+        elif not cancel_all and target in self.goals:
+            code = idl.CancelGoal_Response.ERROR_GOAL_TERMINATED
+        elif not cancel_all:
+            code = idl.CancelGoal_Response.ERROR_UNKNOWN_GOAL_ID
+        else:
+            code = idl.CancelGoal_Response.ERROR_NONE
+        self.publish_status()
+        return idl.CancelGoal_Response(return_code=code, goals_canceling=canceling)
+
+    def publish_feedback(self, goal_id: bytes, feedback: Any) -> None:
+        if self.node.closed:
+            return
+        self.feedback_writer.write(self.types.FeedbackMessage(goal_id=idl.UUID(uuid=goal_id), feedback=feedback))
+
+    def publish_status(self) -> None:
+        if self.node.closed:
+            return
+        self.status_writer.write(idl.GoalStatusArray(status_list=[
+            idl.GoalStatus(goal_info=idl.GoalInfo(goal_id=idl.UUID(uuid=g.goal_id), stamp=g.stamp), status=g.status)
+            for g in self.goals.values()]))
+
+    def _prune(self) -> None:
+        if len(self.goals) <= self.keep:
+            return
+        for goal_id in [k for k, g in self.goals.items() if g.status in TERMINAL][: len(self.goals) - self.keep]:
+            del self.goals[goal_id]
+
+    def close(self) -> None:
+        for goal in self.goals.values():
+            if goal.task is not None and not goal.task.done():
+                goal.task.cancel()
+        for server in (self.send_goal_server, self.result_server, self.cancel_server):
+            server.close()

@@ -1,0 +1,86 @@
+"""Collision nodes: detection from bumper and IMU, contact point, backing out, map marks."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+
+from bt_runtime.runtime.messages import Imu, Pose2D
+from nodes.collision import ImpactDetector
+from nodes.path import ring_candidates
+
+from .conftest import tree_xml
+
+RECOVER = ('<KeepRunningUntilFailure><ForceSuccess><Fallback><Inverter><CollisionDetected source="{src}"/>'
+           '</Inverter><Sequence><StopRobot/><EstimateContactPoint offset="0.2"/>'
+           '<ReverseOut speed="0.1" max_distance="0.6" clearance="0.25"/>'
+           '<ReleaseRobot/></Sequence></Fallback></ForceSuccess></KeepRunningUntilFailure>')
+
+
+async def test_bumper_collision_backs_out_away_from_the_contact(runtime):
+    rt = await runtime(tree_xml(RECOVER.replace("{src}", "bumper")))
+    sim, gate = rt.driver.sim, rt.gate
+    sim.faults.invisible_obstacle(ahead=0.3, width=0.4, depth=0.2, name="box")
+    for _ in range(300):  # drive into the invisible box with a tree command, like a controller would
+        if rt.backup.latest("bumper") is not None and rt.backup.latest("bumper").in_contact:
+            break
+        gate.set_tree_command(0.15, 0.0)
+        await asyncio.sleep(0.01)
+    gate.clear_tree_command()
+    contact_x = sim.pose.x
+    await asyncio.sleep(6.0)
+    bb = rt.tree.root_blackboard
+    point = bb.get("contact_point")
+    assert abs(bb.get("collision_direction")) < 0.3  # straight ahead
+    assert point.x > contact_x  # in front of where the robot touched it
+    assert sim.pose.x < contact_x - 0.2  # it backed away
+    assert not rt.backup.latest("bumper").in_contact
+    await rt.stop()
+
+
+async def test_imu_spike_detects_a_push_from_behind(runtime):
+    rt = await runtime(tree_xml(RECOVER.replace("{src}", "imu")))
+    sim = rt.driver.sim
+    await asyncio.sleep(1.0)
+    x0 = sim.pose.x
+    sim.faults.push(1.0, 0.0)  # hit from behind: pushed forward
+    await asyncio.sleep(0.1)
+    direction = rt.tree.root_blackboard.get("collision_direction")
+    assert abs(abs(direction) - math.pi) < 0.5  # the contact was behind
+    await asyncio.sleep(4.0)
+    assert sim.pose.x > x0  # moved away from the contact, forwards
+    await rt.stop()
+
+
+def test_impact_detector_only_reads_new_samples_and_forgets_old_spikes():
+    class Ctx:
+        def __init__(self):
+            from bt_runtime.runtime.backup import DataBackup
+
+            self.t = 0.0
+            self.backup = DataBackup(None, clock=lambda: self.t)
+
+        def clock(self):
+            return self.t
+
+    ctx = Ctx()
+    detect = ImpactDetector()
+    for i in range(10):
+        ctx.t = i * 0.02
+        ctx.backup.record("imu", Imu(ctx.t, 0.0, 0.3, 0.0))
+    assert detect(ctx, 0.25, 6.0) is None
+    ctx.t = 0.3
+    ctx.backup.record("imu", Imu(ctx.t, 0.0, -9.0, 1.0))  # decelerating hard: hit from the front
+    magnitude, bearing = detect(ctx, 0.25, 6.0)
+    assert magnitude > 9 and abs(bearing - math.atan2(-1.0, 9.0)) < 1e-9
+    ctx.t = 0.6
+    assert detect(ctx, 0.25, 6.0) is None
+
+
+def test_ring_candidates_nearest_ring_first_facing_the_robot_first():
+    goal = Pose2D(0.0, 0.0)
+    cands = ring_candidates(goal, Pose2D(-2.0, 0.0), max_radius=0.3, step=0.1, directions=8)
+    radii = [round(math.hypot(c.x, c.y), 6) for c in cands]
+    assert radii == sorted(radii) and radii[0] == 0.1 and len(cands) == 24
+    assert cands[0].x < 0 and abs(cands[0].y) < 1e-9  # first candidate faces the robot
+    assert all(abs(math.atan2(-c.y, -c.x) - c.yaw) < 1e-9 for c in cands)  # each faces the goal
