@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
 
@@ -259,3 +260,23 @@ def test_fulltree_matches_btcpp() -> None:
     ref_models = {m.get("ID"): m.tag for m in ET.fromstring(ref_xml).find("TreeNodesModel")}
     # BT.CPP 4.10 added TryCatch; otherwise the same node types with the same kinds.
     assert {k: v for k, v in ours_models.items() if k not in ("TryCatch", "Move")} == ref_models
+
+
+PROJECT_TREES = sorted((Path(__file__).resolve().parents[1] / "trees").glob("*.xml"))
+
+
+@pytest.mark.parametrize("path", PROJECT_TREES, ids=[p.name for p in PROJECT_TREES])
+def test_round_trip_project_trees(path: Path) -> None:
+    """The project's own trees (with the project's node library) survive write -> load."""
+    nodes = pytest.importorskip("nodes")
+    if not hasattr(nodes, "register_all"):
+        pytest.skip("nodes.register_all is not available")
+
+    def project_factory() -> BehaviorTreeFactory:
+        f = BehaviorTreeFactory()
+        nodes.register_all(f)
+        return f
+
+    tree = project_factory().create_tree_from_file(path)
+    text = write_tree(tree)
+    assert describe(project_factory().create_tree_from_text(text)) == describe(tree)
