@@ -24,6 +24,8 @@ from .status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeTy
 from .timers import TimerQueue, WakeUpSignal
 
 StatusCallback = Callable[[float, "TreeNode", NodeStatus, NodeStatus], None]
+# A pre-tick hook returns SUCCESS/FAILURE to replace tick(), RUNNING to hold the node (it reports
+# RUNNING without ticking, e.g. at a Groot2 breakpoint), anything else to tick normally.
 PreTickHook = Callable[["TreeNode"], NodeStatus | None]
 PostTickHook = Callable[["TreeNode", NodeStatus], NodeStatus | None]
 
@@ -251,6 +253,13 @@ class TreeNode:
                 hooked = pre(self)
                 if hooked is SUCCESS or hooked is FAILURE:
                     status = hooked
+                elif hooked is RUNNING:
+                    # Held by the hook (a Groot2 breakpoint that must not block the event
+                    # loop): report RUNNING without calling tick() or the post-conditions.
+                    self.__dict__["_held"] = True
+                    if self._status is not RUNNING:
+                        self.set_status(RUNNING)
+                    return RUNNING
             if status is None:
                 monitor = self._monitor
                 t0 = self.config.clock() if monitor is not None else 0.0
@@ -462,7 +471,7 @@ class SyncActionNode(ActionNodeBase):
 
     def _execute_tick_full(self) -> NodeStatus:
         status = TreeNode._execute_tick_full(self)
-        if status is RUNNING:
+        if status is RUNNING and not self.__dict__.pop("_held", False):
             raise LogicError("SyncActionNode MUST never return RUNNING")
         return status
 
