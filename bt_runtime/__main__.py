@@ -18,7 +18,8 @@ from .cli import COMMANDS
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m bt_runtime",
-        description="BehaviorTree.CPP v4 trees in pure Python: tools for tree files.")
+        description="bt_runtime: BehaviorTree.CPP v4 trees in pure Python, an autonomy layer for mobile "
+                    "robots, a simulator and the paper's failure scenarios.")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMANDS:
         importlib.import_module(f"{__package__}.cli.{name}").add_parser(subparsers)

@@ -56,6 +56,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--log-level", default="info", choices=["debug", "info", "warning", "error"])
     p.add_argument("--no-progress", action="store_true", help="no live progress line")
     p.add_argument("--summary-json", type=Path, default=None, help="write the run summary as JSON")
+    from groot.cli import add_arguments as add_groot_arguments
+
+    add_groot_arguments(p)
+    p.set_defaults(func=run)
     return p
 
 
@@ -233,6 +237,9 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any,
         key, value = parse_assignment(assignment)
         bb.set(key, value)
     progress = ProgressLine(runtime) if show_progress else None
+    from groot.cli import Monitoring
+
+    monitoring = await Monitoring.from_args(runtime.tree, args).start()
     await runtime.start()
     progress_task = asyncio.get_running_loop().create_task(progress.run()) if progress else None
     outcomes: list[str] = []
@@ -251,6 +258,7 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any,
             progress.finish()
         holder["summary"], holder["runtime"] = runtime.summary(), runtime  # kept if interrupted
         await runtime.stop()
+        await monitoring.stop()
     summary.goal_outcomes = outcomes
     failed = summary.status == "FAILURE" or any(o not in ("SUCCEEDED", "SUCCESS") for o in outcomes)
     return (summary, runtime), EXIT_TREE_FAILED if failed else EXIT_OK

@@ -28,6 +28,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--only", action="append", default=[], metavar="NAME",
                    help="run only these scenarios (repeatable, or comma separated)")
     p.add_argument("--mode", choices=["both", "with", "without"], default="both")
+    p.set_defaults(func=run)
     return p
 
 
