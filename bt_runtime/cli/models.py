@@ -12,9 +12,10 @@ another TreeNodesModel file (e.g. Nav2's), so trees using them can be embedded t
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 from typing import Any
+
+from .registration import RegistrationError, add_registration_arguments, register
 
 HELP = "print node models (TreeNodesModel XML) for Groot2, or embed them into tree files"
 
@@ -30,10 +31,7 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", "-o", default=None, help="write the models XML here instead of stdout")
     p.add_argument("--builtin", action="store_true",
                    help="include the builtin node types (Groot2 already knows them)")
-    p.add_argument("--register", action="append", default=[], metavar="MODULE:FUNC",
-                   help="call FUNC(factory) from MODULE to register more node types (repeatable)")
-    p.add_argument("--no-nodes", action="store_true",
-                   help="do not call nodes.register_all(factory) from the project's nodes package")
+    add_registration_arguments(p)
     p.add_argument("--models", action="append", default=[], metavar="FILE",
                    help="register the node types declared in a TreeNodesModel file (repeatable)")
     p.add_argument("--embed", nargs="+", default=None, metavar="TREE.xml",
@@ -49,20 +47,10 @@ def build_factory(args: argparse.Namespace) -> Any:
     from bt_runtime.factory import BehaviorTreeFactory
 
     factory = BehaviorTreeFactory()
-    if not args.no_nodes:
-        try:
-            nodes = importlib.import_module("nodes")
-        except ImportError:
-            nodes = None
-        register_all = getattr(nodes, "register_all", None)
-        if callable(register_all):
-            register_all(factory)
-    for spec in args.register:
-        module_name, sep, func_name = spec.partition(":")
-        if not sep or not module_name or not func_name:
-            raise SystemExit(f"--register expects MODULE:FUNC, got {spec!r}")
-        module = importlib.import_module(module_name)
-        getattr(module, func_name)(factory)
+    try:
+        register(factory, args)
+    except RegistrationError as exc:
+        raise SystemExit(f"error: {exc}") from None
     for path in args.models:
         factory.register_models_from_file(path)
     return factory

@@ -11,17 +11,17 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
-import importlib
 import json
 import math
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from ..errors import BehaviorTreeException
 from ..runtime.messages import Pose2D
+from .registration import RegistrationError, add_registration_arguments
+from .registration import registrations as node_registrations
 
 EXIT_OK, EXIT_TREE_FAILED, EXIT_USAGE = 0, 1, 2
 
@@ -47,8 +47,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--config", type=Path, default=None, help="runtime configuration (YAML)")
     p.add_argument("--ros2-config", type=Path, default=None, metavar="FILE",
                    help="--driver ros2: topics, QoS, domain, Nav2 names, components (YAML, see docs/ros2.md)")
-    p.add_argument("--register", action="append", default=[], metavar="MODULE:FUNC",
-                   help="extra node registration function called with the factory (repeatable)")
+    add_registration_arguments(p)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="set a root blackboard entry before the first tick (repeatable)")
     p.add_argument("--log-json", action="store_true", help="structlog events as JSON lines on stdout")
@@ -96,24 +95,6 @@ def parse_assignment(text: str) -> tuple[str, Any]:
         except ValueError:
             pass
     return key.strip(), value
-
-
-def load_registrations(specs: list[str]) -> list[Callable[[Any], Any]]:
-    registrations = []
-    try:
-        nodes = importlib.import_module("nodes")
-        if hasattr(nodes, "register_all"):
-            registrations.append(nodes.register_all)
-    except ImportError:
-        pass
-    for spec in specs:
-        module_name, _, func_name = spec.partition(":")
-        try:
-            module = importlib.import_module(module_name)
-            registrations.append(getattr(module, func_name or "register_all"))
-        except (ImportError, AttributeError) as exc:
-            raise UsageError(f"--register {spec!r}: {exc}") from None
-    return registrations
 
 
 def load_config(path: Path | None):
@@ -325,7 +306,10 @@ def run(args: argparse.Namespace) -> int:
         else:
             configure_logging(json=False, stream=sys.stderr, level="warning")
         config = load_config(args.config)
-        registrations = load_registrations(args.register)
+        try:
+            registrations = node_registrations(args)
+        except RegistrationError as exc:
+            raise UsageError(str(exc)) from None
         show_progress = not args.no_progress and not args.log_json and sys.stderr.isatty()
         virtual = args.driver == "sim" and not args.realtime
         holder: dict[str, Any] = {}

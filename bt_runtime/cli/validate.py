@@ -21,7 +21,7 @@ import json
 import re
 import sys
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -30,6 +30,7 @@ from ..errors import BehaviorTreeException, XMLLoadError
 from ..factory import BehaviorTreeFactory
 from ..ports import blackboard_key
 from ..xml.reader import element_children, parse_xml_text
+from .registration import RegistrationError, add_registration_arguments, registrations
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                              "(ports checked, not runnable). May be repeated.")
     parser.add_argument("--json", action="store_true",
                         help="print a JSON list of {file, line, element, message}")
+    add_registration_arguments(parser)
     parser.set_defaults(func=run)
     return parser
 
@@ -70,13 +72,18 @@ def run(args: argparse.Namespace) -> int:
             seen.add(problem)
             problems.append(problem)
 
+    try:
+        node_registrations = registrations(args)
+    except RegistrationError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     with _warnings_to_stderr():
         models = _read_models(args.models, report)
     if models is not None:
         for file in args.files:
             before = len(problems)
             with _warnings_to_stderr():
-                checked = validate_file(file, models, report)
+                checked = validate_file(file, models, report, node_registrations)
             found = len(problems) - before
             summaries.append(f"{file}: {checked} tree(s) checked, "
                              + ("OK" if not found else f"{found} problem(s)"))
@@ -129,8 +136,10 @@ def _read_models(paths: list[str], report) -> list[tuple[str, str]] | None:
     return models
 
 
-def _factory(models: list[tuple[str, str]]) -> BehaviorTreeFactory:
+def _factory(models: list[tuple[str, str]], registrations: Sequence[Callable[[Any], Any]] = ()) -> BehaviorTreeFactory:
     factory = BehaviorTreeFactory()
+    for registration in registrations:
+        registration(factory)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # already reported by _read_models
         for path, text in models:
@@ -138,7 +147,8 @@ def _factory(models: list[tuple[str, str]]) -> BehaviorTreeFactory:
     return factory
 
 
-def validate_file(file: str, models: list[tuple[str, str]], report) -> int:
+def validate_file(file: str, models: list[tuple[str, str]], report,
+                  registrations: Sequence[Callable[[Any], Any]] = ()) -> int:
     """Check one file; report its problems; return how many trees were checked."""
     path = Path(file)
     try:
@@ -155,7 +165,7 @@ def validate_file(file: str, models: list[tuple[str, str]], report) -> int:
     neutralized: set[str] = set()
     attempts = 0
     while True:
-        factory = _factory(models)
+        factory = _factory(models, registrations)
         try:
             factory.registry.load_text(text, file=file)
             break
