@@ -3,15 +3,14 @@
     python bench/sim.py [--seconds 60] [--robot burger] [--seed 0] [--json]
 
 Drives the robot from the front yard through the front door, the east room and the study
-(and back, and again, until the time is up) with a scripted waypoint follower on ground
-truth (10 Hz, at most 0.3 m/s), physics at 100 Hz, every sensor at
-its profile rate, and prints the real-time factor with a breakdown from perf_counter
-accounting: physics (pymunk), lidar (ray casting + noise), other sim work (drivers, IMU/odom/
-battery integration, contacts, recording) and the rest (event loop, the follower, subscribers).
-Also prints micro-benchmarks: lidar ms/scan and physics µs/step.
-
-To put the Nav2 stand-in in the loop later, pass a different ``make_driver`` to ``drive``: any
-object with ``async run(timeout)`` that commands ``sim`` will do.
+(and back, and again, until the time is up) with the Nav2 stand-in (planner replanning at
+1 Hz, Regulated Pure Pursuit at 20 Hz, costmaps from the scans), physics at 100 Hz and every
+sensor at its profile rate, and prints the real-time factor with a breakdown from
+perf_counter accounting: physics (pymunk), lidar (ray casting + noise), other sim work
+(drivers, IMU/odom/battery integration, contacts, recording), planning, control, and the rest
+(event loop, costmap updates, subscribers). ``--scripted`` drives with a waypoint follower on
+ground truth instead (the simulator's own share). Also prints micro-benchmarks: lidar ms/scan
+and physics µs/step. Target (issue #3): >= 100x real time on one core.
 """
 
 from __future__ import annotations
@@ -58,15 +57,75 @@ def scripted(sim: Simulator):
     return Patrol(sim, APARTMENT_ROUTE, speed=min(sim.profile.max_linear, 0.3))
 
 
+class NavPatrol:
+    """The Nav2 stand-in drives the route (planner at 1 Hz while following, controller at
+    20 Hz); its commands go straight to the base, as in a plain Nav2 setup."""
+
+    def __init__(self, sim: Simulator, route) -> None:
+        from sim.driver import occupancy_from_world, robot_params_for
+        from sim.nav import NavStack
+
+        self.sim = sim
+        self.route = list(route)
+        self.nav = NavStack(sim.bus, occupancy_from_world(sim), robot=robot_params_for(sim))
+        sim.subscribe("nav_cmd_vel", lambda t: sim.command(t.linear, t.angular))
+        self.timing = {"planning": 0.0, "control": 0.0}
+        _time_calls(self.nav.planner, "plan", self.timing, "planning")
+        _time_calls(self.nav.controller, "compute", self.timing, "control")
+
+    async def run(self, timeout: float) -> None:
+        from bt_runtime.runtime.messages import Pose2D
+
+        loop = asyncio.get_running_loop()
+        end = loop.time() + timeout
+        await self.nav.start()
+        while self.sim.bus.latest("pose") is None:  # as Nav2 waits for AMCL's first pose
+            await asyncio.sleep(0.05)
+        back = [(self.sim.spawn.x, self.sim.spawn.y), *self.route[:-1]][::-1]
+        legs = [self.route, back]
+        i = 0
+        while loop.time() < end - 1e-9:
+            for x, y in legs[i % 2]:
+                handle = self.nav.navigate_to_pose(Pose2D(x, y))
+                try:
+                    await asyncio.wait_for(asyncio.shield(asyncio.ensure_future(handle._wait())),
+                                           max(0.0, end - loop.time()))
+                except TimeoutError:
+                    handle.cancel()
+                    break
+                if not handle.result().succeeded:
+                    await asyncio.sleep(0.5)  # never spin on a leg that fails at once
+            i += 1
+        await self.nav.stop()
+
+
+def _time_calls(obj, name: str, timing: dict, key: str) -> None:
+    inner = getattr(obj, name)
+
+    def timed(*args, **kwargs):
+        t = time.perf_counter()
+        try:
+            return inner(*args, **kwargs)
+        finally:
+            timing[key] += time.perf_counter() - t
+
+    setattr(obj, name, timed)
+
+
+def navigated(sim: Simulator):
+    return NavPatrol(sim, APARTMENT_ROUTE)
+
+
 def drive(seconds: float, *, robot: str = "burger", seed: int = 0, world: str = "apartment",
-          make_driver=scripted) -> dict:
+          make_driver=navigated) -> dict:
     sim = Simulator(world, robot, seed=seed)
     counts: dict[str, int] = {}
     for topic in ("scan", "imu", "odom", "pose", "battery", "bumper", "ground_truth"):
         sim.subscribe(topic, lambda m, t=topic: counts.__setitem__(t, counts.get(t, 0) + 1))
 
+    driver = make_driver(sim)
+
     async def main() -> tuple[float, float]:
-        driver = make_driver(sim)
         await sim.start()
         t0 = time.perf_counter()
         await driver.run(timeout=seconds)
@@ -86,7 +145,8 @@ def drive(seconds: float, *, robot: str = "burger", seed: int = 0, world: str = 
         "rtf": seconds / wall, "distance_m": dist, "collisions": len(sim.events_of("collision")),
         "steps": sim.perf["steps"], "scans": sim.lidar.casts, "messages": counts,
         "breakdown_s": {"physics": physics_s, "lidar": lidar_s, "other_sim": step_s - physics_s - lidar_s,
-                        "loop_and_driver": wall - step_s},
+                        **getattr(driver, "timing", {}),
+                        "loop_and_rest": wall - step_s - sum(getattr(driver, "timing", {}).values())},
         "physics_us_per_step": physics_s / max(sim.perf["steps"], 1) * 1e6,
         "lidar_ms_per_scan": lidar_s / max(sim.lidar.casts, 1) * 1e3,
         "sim_share_rtf": seconds / step_s,
@@ -124,8 +184,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--repeat", type=int, default=3, help="best of N runs")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--scripted", action="store_true",
+                    help="drive with the scripted waypoint follower instead of the Nav2 stand-in "
+                         "(the simulator's own share)")
     args = ap.parse_args(argv)
-    runs = [drive(args.seconds, robot=args.robot, seed=args.seed) for _ in range(args.repeat)]
+    make = scripted if args.scripted else navigated
+    runs = [drive(args.seconds, robot=args.robot, seed=args.seed, make_driver=make) for _ in range(args.repeat)]
     best = min(runs, key=lambda r: r["wall_seconds"])
     best["lidar_microbench"] = {w: lidar_microbench(w, args.robot) for w in ("apartment", "round_obstacles")}
     best["physics_microbench_us_per_step"] = physics_microbench(args.robot)
