@@ -186,9 +186,13 @@ def format_table(result: CampaignResult) -> str:
         n = max(len(modes["with"]), len(modes["without"]))
         without = result.success_rate(name, "without")
         with_ = result.success_rate(name, "with")
-        lines.append(f"{name:<15}{n:>5}{without:>11.0f}{with_:>9.0f}   "
+        lines.append(f"{name:<15}{n:>5}{_pct(without):>11}{_pct(with_):>9}   "
                      f"{spec.paper.runs:>11}{spec.paper.without:>9.0f}{spec.paper.with_:>6.0f}")
     return "\n".join(lines)
+
+
+def _pct(rate: float) -> str:
+    return "-" if rate != rate else f"{rate:.0f}"  # NaN: that mode was not run
 
 
 def format_failures(result: CampaignResult) -> str:
