@@ -5,6 +5,12 @@ pre-conditions, calls ``tick()``, runs post-conditions, and stores the status (S
 returned but never stored). Nodes with no pre/post scripts and no hooks take a fast path: the
 per-tick cost of the common case is one Python call per node plus a status store.
 
+Hot state lives in a ``NodeCell`` per node (status and the callable a parent ticks), one
+shared type whatever the node's class, so the attribute sites of the parents' loops stay
+monomorphic (CPython 3.11 specializes them per type). An observed node's cell is an
+``ObservedCell``, whose ``status`` setter notifies the subscribers: stores never need to
+check for observers.
+
 User node kinds: SyncActionNode, ConditionNode, StatefulActionNode (on_start / on_running /
 on_halted), AsyncActionNode (``async def run(self)``: started on the first tick, polled each
 tick, cancelled on halt), ControlNode, DecoratorNode. A tick never awaits.
@@ -66,6 +72,43 @@ class NodeConfig:
         self.source: tuple[str | None, int | None] = (None, None)  # (file, line) for messages
 
 
+class NodeCell:
+    """The hot state of one node, shared with its parent: ``status`` and ``fast``.
+
+    ``fast`` is what a parent calls to tick the node: the bare ``tick`` when the node has no
+    pre/post-condition scripts and no hooks (the parent then stores the result in ``status``
+    itself, see ``tick_cell``), otherwise the full ``execute_tick``. Every node has exactly
+    one cell for its whole life; parents keep lists of their children's cells.
+    """
+
+    __slots__ = ("status", "fast", "node")
+
+    def __init__(self, node: TreeNode):
+        self.status = IDLE
+        self.node = node
+
+
+_status_slot = NodeCell.__dict__["status"]
+_raw_get_status = _status_slot.__get__  # (cell) -> status, whatever the cell's class
+_raw_set_status = _status_slot.__set__  # (cell, status): store without notifying
+
+
+def _observed_set_status(cell: NodeCell, new: NodeStatus) -> None:
+    prev = _raw_get_status(cell)
+    if prev is not new:
+        _raw_set_status(cell, new)
+        cell.node._notify(prev, new)
+
+
+class ObservedCell(NodeCell):
+    """The cell of a node with status subscribers: a change of ``status`` notifies them
+    synchronously (BT.CPP setStatus/resetStatus). Cells switch class in place, so parents'
+    references stay valid."""
+
+    __slots__ = ()
+    status = property(_raw_get_status, _observed_set_status)  # type: ignore[assignment]
+
+
 class TreeNodeManifest:
     """What the factory knows about a registered node type (ports, type, description)."""
 
@@ -88,14 +131,16 @@ class TreeNodeManifest:
 class TreeNode:
     """Base of every node. Subclasses implement ``tick()`` (and ``halt()`` when stateful).
 
-    ``_fast`` is what a parent calls to tick this node: the bare ``tick`` when the node has
-    no pre/post-condition scripts and no hooks (the parent then stores the status itself,
-    saving a Python call per node), otherwise the full ``execute_tick``. Classes whose BT.CPP
-    ``executeTick`` does extra work (decorators, sync actions) set ``_bare_tick_ok = False``.
+    ``_cell`` holds the node's status and ``fast``, what a parent calls to tick this node:
+    the bare ``tick`` when the node has no pre/post-condition scripts and no hooks (the parent
+    then stores the status itself, saving a Python call per node), otherwise the full
+    ``execute_tick``. Classes whose BT.CPP ``executeTick`` does extra work (decorators, sync
+    actions) set ``_bare_tick_ok = False``. ``_status`` and ``_fast`` remain as properties
+    over the cell; a raw ``_status`` store does not notify, as before.
     """
 
-    __slots__ = ("name", "config", "_status", "_subscribers", "_pre_hook", "_post_hook", "_monitor",
-                 "_input_cache", "_fast", "__dict__", "__weakref__")
+    __slots__ = ("name", "config", "_cell", "_subscribers", "_pre_hook", "_post_hook", "_monitor",
+                 "_input_cache", "__dict__", "__weakref__")
 
     node_type: ClassVar[NodeType] = NodeType.UNDEFINED
     description: ClassVar[str] = ""
@@ -104,7 +149,7 @@ class TreeNode:
     def __init__(self, name: str, config: NodeConfig | None = None):
         self.name = name
         self.config = config if config is not None else NodeConfig()
-        self._status = IDLE
+        self._cell = NodeCell(self)
         self._subscribers: list[StatusCallback] = []
         self._pre_hook: PreTickHook | None = None
         self._post_hook: PostTickHook | None = None
@@ -124,7 +169,19 @@ class TreeNode:
     # -- identity ------------------------------------------------------------------------------
     @property
     def status(self) -> NodeStatus:
-        return self._status
+        return self._cell.status
+
+    @property
+    def _status(self) -> NodeStatus:
+        return self._cell.status
+
+    @_status.setter
+    def _status(self, value: NodeStatus) -> None:
+        _raw_set_status(self._cell, value)  # raw: no notification (use set_status for that)
+
+    @property
+    def _fast(self) -> Callable[[], NodeStatus]:
+        return self._cell.fast
 
     @property
     def uid(self) -> int:
@@ -161,18 +218,10 @@ class TreeNode:
         if new_status is IDLE:
             raise LogicError(f"Node [{self.name}]: you are not allowed to set manually the status to "
                              "IDLE. If you know what you are doing (?) use resetStatus() instead.")
-        prev = self._status
-        if prev is not new_status:
-            self._status = new_status
-            if self._subscribers:
-                self._notify(prev, new_status)
+        self._cell.status = new_status  # an ObservedCell notifies on change
 
     def reset_status(self) -> None:
-        prev = self._status
-        if prev is not IDLE:
-            self._status = IDLE
-            if self._subscribers:
-                self._notify(prev, IDLE)
+        self._cell.status = IDLE
 
     def _notify(self, prev: NodeStatus, new: NodeStatus) -> None:
         stamp = self.config.clock()
@@ -182,10 +231,13 @@ class TreeNode:
     def subscribe_to_status_change(self, callback: StatusCallback) -> Callable[[], None]:
         """Call ``callback(timestamp, node, previous, new)`` synchronously on every change."""
         self._subscribers.append(callback)
+        self._cell.__class__ = ObservedCell
 
         def unsubscribe() -> None:
             if callback in self._subscribers:
                 self._subscribers.remove(callback)
+                if not self._subscribers:
+                    self._cell.__class__ = NodeCell
 
         return unsubscribe
 
@@ -208,10 +260,11 @@ class TreeNode:
         if (cfg.pre_conditions or cfg.post_conditions or self._pre_hook or self._post_hook
                 or self._monitor):
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
-            self._fast = self._execute_tick_full
+            self._cell.fast = self._execute_tick_full
         else:
             self.__dict__.pop("execute_tick", None)
-            self._fast = self._bare_tick() if self._bare_tick_ok else self.execute_tick
+            bare = self._bare_tick_ok and type(self).execute_tick in _LIBRARY_EXECUTE_TICKS
+            self._cell.fast = self._bare_tick() if bare else self.execute_tick
 
     def _bare_tick(self) -> Callable[[], NodeStatus]:
         return self.tick
@@ -235,11 +288,10 @@ class TreeNode:
             raise
         except Exception as exc:
             raise NodeExecutionError(self.config.path, self.config.registration_id, exc) from exc
-        if status is not self._status:
-            if status is not SKIPPED:
-                self.set_status(status)
-        elif status is IDLE:
-            self.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+        if status is not SKIPPED:
+            if status is IDLE:
+                self.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+            self._cell.status = status  # an ObservedCell notifies on change
         return status
 
     def _execute_tick_full(self) -> NodeStatus:
@@ -269,11 +321,10 @@ class TreeNode:
             hooked = post(self, status)
             if hooked is SUCCESS or hooked is FAILURE:
                 status = hooked
-        if status is not self._status:
-            if status is not SKIPPED:
-                self.set_status(status)
-        elif status is IDLE:
-            self.set_status(status)
+        if status is not SKIPPED:
+            if status is IDLE:
+                self.set_status(status)  # raises
+            self._cell.status = status
         return status
 
     def _check_pre_conditions(self) -> NodeStatus | None:
@@ -466,7 +517,7 @@ class SimpleActionNode(SyncActionNode):
     _bare_tick_ok = True  # tick() makes the RUNNING check itself
 
     def tick(self) -> NodeStatus:
-        if self._status is IDLE:
+        if self._cell.status is IDLE:
             self.set_status(RUNNING)
         status = self._fn(self)
         if status is RUNNING:
@@ -506,7 +557,7 @@ class StatefulActionNode(ActionNodeBase):
         return self._halt_requested
 
     def tick(self) -> NodeStatus:
-        status = self._status
+        status = self._cell.status
         if status is IDLE:
             result = self.on_start()
             if result is IDLE:
@@ -611,39 +662,82 @@ class AsyncActionNode(ActionNodeBase):
 # Control nodes and decorators
 # ---------------------------------------------------------------------------------------------
 
-class ControlNode(TreeNode):
-    """A node with an ordered list of children."""
+class ChildList(list):
+    """``ControlNode.children``: a list of nodes that keeps the parent's list of the children's
+    cells (what the hot loops read) in step, however it is modified."""
 
-    __slots__ = ("children",)
+    def __init__(self, items: Iterable[TreeNode] = (), cells: list[NodeCell] | None = None):
+        list.__init__(self, items)
+        self.cells: list[NodeCell] = cells if cells is not None else []
+        self._sync()
+
+    def _sync(self) -> None:
+        cells = self.__dict__.setdefault("cells", [])  # setdefault: copies are made without __init__
+        cells[:] = [child._cell for child in self]
+
+    def append(self, child: TreeNode) -> None:
+        list.append(self, child)
+        self.__dict__.setdefault("cells", []).append(child._cell)
+
+
+def _synced(name: str) -> Callable[..., Any]:
+    method = getattr(list, name)
+
+    @functools.wraps(method)
+    def wrapper(self: ChildList, *args: Any, **kwargs: Any) -> Any:
+        result = method(self, *args, **kwargs)
+        self._sync()
+        return result
+
+    return wrapper
+
+
+for _name in ("extend", "insert", "remove", "pop", "clear", "sort", "reverse", "__setitem__",
+              "__delitem__", "__iadd__", "__imul__"):
+    setattr(ChildList, _name, _synced(_name))
+del _name
+
+
+class ControlNode(TreeNode):
+    """A node with an ordered list of children (``children``; ``_cells`` are their cells)."""
+
+    __slots__ = ("_children", "_cells")
     node_type = NodeType.CONTROL
 
     def __init__(self, name: str, config: NodeConfig | None = None):
-        self.children: list[TreeNode] = []
+        self._cells: list[NodeCell] = []
+        self._children = ChildList((), self._cells)
         super().__init__(name, config)
 
+    @property
+    def children(self) -> list[TreeNode]:
+        return self._children
+
+    @children.setter
+    def children(self, nodes: Iterable[TreeNode]) -> None:
+        self._cells = []
+        self._children = ChildList(nodes, self._cells)
+
     def add_child(self, child: TreeNode) -> None:
-        self.children.append(child)
+        self._children.append(child)
 
     def children_nodes(self) -> list[TreeNode]:
-        return self.children
+        return self._children
 
     def reset_children(self) -> None:
         """Halt RUNNING children, then set every child IDLE (BT.CPP resetChildren)."""
-        for child in self.children:
-            status = child._status
+        for cell in self._cells:
+            status = cell.status
             if status is not IDLE:
                 if status is RUNNING:
-                    child.halt_node()
-                if child._subscribers:
-                    child.reset_status()
-                else:
-                    child._status = IDLE
+                    cell.node.halt_node()
+                cell.status = IDLE  # notifies if observed
 
     def halt_child(self, index: int) -> None:
-        child = self.children[index]
-        if child._status is RUNNING:
-            child.halt_node()
-        child.reset_status()
+        cell = self._cells[index]
+        if cell.status is RUNNING:
+            cell.node.halt_node()
+        cell.status = IDLE
 
     def halt(self) -> None:
         self.reset_children()
@@ -651,35 +745,46 @@ class ControlNode(TreeNode):
 
 
 class DecoratorNode(TreeNode):
-    """A node with exactly one child; a completed child is reset after the tick."""
+    """A node with exactly one child (``child``; ``_child_cell`` is its cell); a completed
+    child is reset after the tick."""
 
-    __slots__ = ("child",)
+    __slots__ = ("_child", "_child_cell")
     node_type = NodeType.DECORATOR
     # execute_tick resets a completed child afterwards; subclasses whose tick() always does
     # that itself may set _bare_tick_ok = True.
     _bare_tick_ok = False
 
     def __init__(self, name: str, config: NodeConfig | None = None):
-        self.child: TreeNode | None = None
+        self._child: TreeNode | None = None
+        self._child_cell: NodeCell | None = None
         super().__init__(name, config)
 
+    @property
+    def child(self) -> TreeNode | None:
+        return self._child
+
+    @child.setter
+    def child(self, child: TreeNode | None) -> None:
+        self._child = child
+        self._child_cell = child._cell if child is not None else None
+
     def set_child(self, child: TreeNode) -> None:
-        if self.child is not None:
+        if self._child is not None:
             raise BehaviorTreeException("Decorator already has a child")
         self.child = child
 
     add_child = set_child
 
     def children_nodes(self) -> list[TreeNode]:
-        return [self.child] if self.child is not None else []
+        return [self._child] if self._child is not None else []
 
     def reset_child(self) -> None:
-        child = self.child
-        if child is None:
+        cell = self._child_cell
+        if cell is None:
             return
-        if child._status is RUNNING:
-            child.halt_node()
-        child.reset_status()
+        if cell.status is RUNNING:
+            cell.node.halt_node()
+        cell.status = IDLE
 
     halt_child = reset_child
 
@@ -689,21 +794,27 @@ class DecoratorNode(TreeNode):
 
     def execute_tick(self) -> NodeStatus:
         status = TreeNode.execute_tick(self)
-        child = self.child
-        if child is not None:
-            cs = child._status
+        cell = self._child_cell
+        if cell is not None:
+            cs = cell.status
             if cs is SUCCESS or cs is FAILURE:
-                child.reset_status()
+                cell.status = IDLE
         return status
 
     def _execute_tick_full(self) -> NodeStatus:
         status = TreeNode._execute_tick_full(self)
-        child = self.child
-        if child is not None:
-            cs = child._status
+        cell = self._child_cell
+        if cell is not None:
+            cs = cell.status
             if cs is SUCCESS or cs is FAILURE:
-                child.reset_status()
+                cell.status = IDLE
         return status
+
+
+# A class that overrides execute_tick (as BT.CPP allows: it is virtual) is always ticked
+# through it; the library's own overrides are known to be equivalent to the bare tick where
+# the class sets _bare_tick_ok.
+_LIBRARY_EXECUTE_TICKS = (TreeNode.execute_tick, SyncActionNode.execute_tick, DecoratorNode.execute_tick)
 
 
 class SimpleDecoratorNode(DecoratorNode):
@@ -718,31 +829,47 @@ class SimpleDecoratorNode(DecoratorNode):
         return self._fn(self.child.execute_tick(), self)
 
 
-def store_child_status(child: TreeNode, status: NodeStatus) -> None:
-    """What a parent does after calling ``child._fast()``: store the result like executeTick.
+def tick_cell(cell: NodeCell) -> NodeStatus:
+    """``cell.node.execute_tick()``, through the cell: tick the node and store the result
+    (SKIPPED is not stored, IDLE raises; spec 3.1). An error raised by ``tick()`` is wrapped
+    with the node's path (spec 3.7); one raised by execute_tick's own checks (IDLE, a sync
+    action returning RUNNING, scripts, hooks) is not, exactly as from execute_tick.
 
-    The hot control loops inline this (see sequences.py, reactive.py); keep them in sync.
+    This is the canonical child tick; decorators.py inlines it where it is hot. (The loops of
+    sequences.py and reactive.py also wrap errors from the checks of a non-bare child.)
     """
-    if status is not child._status:
-        if status is not SKIPPED:
-            if status is IDLE or child._subscribers:
-                child.set_status(status)
-            else:
-                child._status = status
-    elif status is IDLE:
-        child.set_status(status)
+    fast = cell.fast
+    try:
+        status = fast()
+    except NodeExecutionError:
+        raise
+    except Exception as exc:
+        if fast == cell.node.execute_tick:  # not the bare tick: execute_tick's own error
+            raise
+        raise _wrap_error(cell, exc) from exc
+    if status is not SKIPPED:
+        if status is IDLE:
+            cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+        cell.status = status
+    return status
+
+
+def _wrap_error(cell: NodeCell, exc: Exception) -> NodeExecutionError:
+    config = cell.node.config
+    return NodeExecutionError(config.path, config.registration_id, exc)
+
+
+def store_child_status(child: TreeNode, status: NodeStatus) -> None:
+    """What a parent does after calling ``child._fast()``: store the result like executeTick."""
+    if status is not SKIPPED:
+        if status is IDLE:
+            child.set_status(status)  # raises
+        child._cell.status = status
 
 
 def tick_child(child: TreeNode) -> NodeStatus:
     """Tick ``child`` through its fast path, wrapping errors with its path like executeTick."""
-    try:
-        status = child._fast()
-    except NodeExecutionError:
-        raise
-    except Exception as exc:
-        raise NodeExecutionError(child.config.path, child.config.registration_id, exc) from exc
-    store_child_status(child, status)
-    return status
+    return tick_cell(child._cell)
 
 
 def manifest_for(cls: type[TreeNode], registration_id: str, ports: Any = None,
