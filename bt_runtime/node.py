@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import functools
 from collections.abc import Callable, Iterable
+from types import MethodType
 from typing import Any, ClassVar
 
 from .blackboard import Blackboard
@@ -37,11 +38,15 @@ _MISSING: Any = object()
 
 
 class NodeConfig:
-    """Everything a node gets at creation: blackboard, port remappings, identity, services."""
+    """Everything a node gets at creation: blackboard, port remappings, identity, services.
+
+    ``pre_conditions``, ``post_conditions`` and ``other_attributes`` are usually empty: they
+    are created on first use (reading one returns a dict you may fill).
+    """
 
     __slots__ = ("blackboard", "enums", "input_ports", "output_ports", "manifest", "uid", "path",
-                 "pre_conditions", "post_conditions", "other_attributes", "context", "wake_up",
-                 "timers", "clock", "registration_id", "source")
+                 "_pre", "_post", "_other", "context", "wake_up", "timers", "clock",
+                 "registration_id", "_file", "_line")
 
     def __init__(self, blackboard: Blackboard | None = None, *, input_ports: dict[str, str] | None = None,
                  output_ports: dict[str, str] | None = None, enums: dict[str, int] | None = None,
@@ -61,15 +66,80 @@ class NodeConfig:
         self.manifest = manifest
         self.uid = uid
         self.path = path
-        self.pre_conditions: dict[str, Any] = {}
-        self.post_conditions: dict[str, Any] = {}
-        self.other_attributes: dict[str, str] = {}
+        self._pre = self._post = self._other = None
         self.context = context
         self.wake_up: WakeUpSignal = wake_up
         self.timers: TimerQueue = timers
         self.clock: Callable[[], float] = clock or timers.clock
         self.registration_id = manifest.registration_id if manifest else ""
-        self.source: tuple[str | None, int | None] = (None, None)  # (file, line) for messages
+        self._file: str | None = None
+        self._line: int | None = None
+
+    @classmethod
+    def _for_node(cls, blackboard: Blackboard, enums: dict[str, int], manifest: TreeNodeManifest,
+                  uid: int, path: str, context: Any, wake_up: WakeUpSignal, timers: TimerQueue,
+                  clock: Callable[[], float], file: str | None, line: int | None) -> NodeConfig:
+        """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
+        positional arguments (much cheaper than the keyword call, once per node)."""
+        self = _new_object(cls)
+        self.blackboard = blackboard
+        self.enums = enums
+        self.input_ports = {}
+        self.output_ports = {}
+        self.manifest = manifest
+        self.uid = uid
+        self.path = path
+        self._pre = self._post = self._other = None
+        self.context = context
+        self.wake_up = wake_up
+        self.timers = timers
+        self.clock = clock
+        self.registration_id = manifest.registration_id
+        self._file = file
+        self._line = line
+        return self
+
+    @property
+    def source(self) -> tuple[str | None, int | None]:
+        """(file, line) of the node's element, for messages."""
+        return (self._file, self._line)
+
+    @source.setter
+    def source(self, value: tuple[str | None, int | None]) -> None:
+        self._file, self._line = value
+
+    @property
+    def pre_conditions(self) -> dict[str, Any]:
+        if self._pre is None:
+            self._pre = {}
+        return self._pre
+
+    @pre_conditions.setter
+    def pre_conditions(self, value: dict[str, Any]) -> None:
+        self._pre = value
+
+    @property
+    def post_conditions(self) -> dict[str, Any]:
+        if self._post is None:
+            self._post = {}
+        return self._post
+
+    @post_conditions.setter
+    def post_conditions(self, value: dict[str, Any]) -> None:
+        self._post = value
+
+    @property
+    def other_attributes(self) -> dict[str, str]:
+        if self._other is None:
+            self._other = {}
+        return self._other
+
+    @other_attributes.setter
+    def other_attributes(self, value: dict[str, str]) -> None:
+        self._other = value
+
+
+_new_object = object.__new__
 
 
 class NodeCell:
@@ -139,23 +209,31 @@ class TreeNode:
     over the cell; a raw ``_status`` store does not notify, as before.
     """
 
-    __slots__ = ("name", "config", "_cell", "_subscribers", "_pre_hook", "_post_hook", "_monitor",
-                 "_input_cache", "__dict__", "__weakref__")
+    __slots__ = ("name", "config", "_cell", "_input_cache", "__dict__", "__weakref__")
 
     node_type: ClassVar[NodeType] = NodeType.UNDEFINED
     description: ClassVar[str] = ""
     _bare_tick_ok: ClassVar[bool] = True
+    # Rarely set: class-level defaults, an instance attribute once set (fewer stores per node).
+    _subscribers: list[StatusCallback] | tuple[()] = ()  # a list once someone subscribes
+    _pre_hook: PreTickHook | None = None
+    _post_hook: PostTickHook | None = None
+    _monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self.name = name
-        self.config = config if config is not None else NodeConfig()
-        self._cell = NodeCell(self)
-        self._subscribers: list[StatusCallback] = []
-        self._pre_hook: PreTickHook | None = None
-        self._post_hook: PostTickHook | None = None
-        self._monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
-        self._input_cache: dict[str, Any] = {}
-        self._select_execute_tick()
+        if config is None:
+            config = NodeConfig()
+        self.config = config
+        self._cell = cell = _new_object(NodeCell)  # NodeCell(self), without a Python call
+        cell.status = IDLE
+        cell.node = self
+        self._input_cache: dict[str, Any] | None = None  # literal inputs, converted once
+        if config._pre or config._post:
+            self._select_execute_tick()
+        else:  # _select_execute_tick() without hooks, inlined: this runs once per node built
+            bare = self._bare_tick_ok and type(self).execute_tick in _LIBRARY_EXECUTE_TICKS
+            cell.fast = self._bare_tick() if bare else self.execute_tick
 
     # -- declaration ---------------------------------------------------------------------------
     @classmethod
@@ -230,6 +308,8 @@ class TreeNode:
 
     def subscribe_to_status_change(self, callback: StatusCallback) -> Callable[[], None]:
         """Call ``callback(timestamp, node, previous, new)`` synchronously on every change."""
+        if not isinstance(self._subscribers, list):
+            self._subscribers = list(self._subscribers)
         self._subscribers.append(callback)
         self._cell.__class__ = ObservedCell
 
@@ -257,8 +337,7 @@ class TreeNode:
     def _select_execute_tick(self) -> None:
         """Choose the fast path when there is nothing but ``tick()`` to run."""
         cfg = self.config
-        if (cfg.pre_conditions or cfg.post_conditions or self._pre_hook or self._post_hook
-                or self._monitor):
+        if cfg._pre or cfg._post or self._pre_hook or self._post_hook or self._monitor:
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
             self._cell.fast = self._execute_tick_full
         else:
@@ -328,7 +407,7 @@ class TreeNode:
         return status
 
     def _check_pre_conditions(self) -> NodeStatus | None:
-        pre = self.config.pre_conditions
+        pre = self.config._pre
         if not pre:
             return None
         bb = self.config.blackboard
@@ -355,7 +434,7 @@ class TreeNode:
         return None
 
     def _run_post_conditions(self, status: NodeStatus) -> None:
-        post = self.config.post_conditions
+        post = self.config._post
         if not post:
             return
         bb = self.config.blackboard
@@ -370,7 +449,8 @@ class TreeNode:
     def halt_node(self) -> None:
         """BT.CPP haltNode(): ``halt()`` then the ``_onHalted`` script."""
         self.halt()
-        script = self.config.post_conditions.get("_onHalted") if self.config.post_conditions else None
+        post = self.config._post
+        script = post.get("_onHalted") if post else None
         if script is not None:
             script.run(self.config.blackboard, self.config.enums)
 
@@ -416,9 +496,10 @@ class TreeNode:
 
     def _read_input(self, name: str) -> Any:
         cache = self._input_cache
-        cached = cache.get(name, _MISSING)
-        if cached is not _MISSING:
-            return cached
+        if cache is not None:
+            cached = cache.get(name, _MISSING)
+            if cached is not _MISSING:
+                return cached
         raw, port = self._raw_input(name)
         if not isinstance(raw, str):
             return raw  # a non-string default is returned as is
@@ -432,6 +513,8 @@ class TreeNode:
                     value = port.type.from_string(raw, cfg.enums)
                 except BehaviorTreeException as exc:
                     raise BTRuntimeError(f"getInput(): {exc}") from None
+            if cache is None:
+                cache = self._input_cache = {}
             cache[name] = value  # literals never change: convert once
             return value
         entry = cfg.blackboard.get_entry(key)
@@ -510,6 +593,8 @@ class SyncActionNode(ActionNodeBase):
 class SimpleActionNode(SyncActionNode):
     """``register_simple_action``: sets RUNNING first, then ``fn(node)`` (IDLE->RUNNING->result)."""
 
+    __slots__ = ("_fn",)
+
     def __init__(self, name: str, config: NodeConfig, fn: Callable[[TreeNode], NodeStatus]):
         self._fn = fn
         super().__init__(name, config)
@@ -528,6 +613,8 @@ class SimpleActionNode(SyncActionNode):
 class SimpleConditionNode(ConditionNode):
     """``register_simple_condition``: ``fn(node)`` each tick."""
 
+    __slots__ = ("_fn",)
+
     def __init__(self, name: str, config: NodeConfig, fn: Callable[[TreeNode], NodeStatus]):
         self._fn = fn
         super().__init__(name, config)
@@ -536,7 +623,9 @@ class SimpleConditionNode(ConditionNode):
         return self._fn(self)
 
     def _bare_tick(self) -> Callable[[], NodeStatus]:
-        return functools.partial(self._fn, self)  # one Python frame per tick instead of two
+        # fn bound to the node, like a method: one Python frame per tick instead of two, and
+        # one object (a partial would also allocate its argument tuple)
+        return MethodType(self._fn, self)
 
 
 class StatefulActionNode(ActionNodeBase):
@@ -663,21 +752,29 @@ class AsyncActionNode(ActionNodeBase):
 # ---------------------------------------------------------------------------------------------
 
 class ChildList(list):
-    """``ControlNode.children``: a list of nodes that keeps the parent's list of the children's
-    cells (what the hot loops read) in step, however it is modified."""
+    """``ControlNode.children``: a list of nodes that keeps ``cells``, the parent's list of the
+    children's cells (what the hot loops read), in step however it is modified."""
+
+    __slots__ = ("cells",)
 
     def __init__(self, items: Iterable[TreeNode] = (), cells: list[NodeCell] | None = None):
         list.__init__(self, items)
-        self.cells: list[NodeCell] = cells if cells is not None else []
+        self.cells = cells if cells is not None else []
         self._sync()
 
     def _sync(self) -> None:
-        cells = self.__dict__.setdefault("cells", [])  # setdefault: copies are made without __init__
+        try:
+            cells = self.cells
+        except AttributeError:  # a copy made without __init__ (copy.copy, pickle)
+            cells = self.cells = []
         cells[:] = [child._cell for child in self]
 
     def append(self, child: TreeNode) -> None:
         list.append(self, child)
-        self.__dict__.setdefault("cells", []).append(child._cell)
+        try:
+            self.cells.append(child._cell)
+        except AttributeError:
+            self._sync()
 
 
 def _synced(name: str) -> Callable[..., Any]:
@@ -699,19 +796,26 @@ del _name
 
 
 class ControlNode(TreeNode):
-    """A node with an ordered list of children (``children``; ``_cells`` are their cells)."""
+    """A node with an ordered list of children (``children``; ``_cells`` are their cells).
+
+    The ``children`` list is made on first use: the hot loops and the builder need only
+    ``_cells`` (each cell knows its node), so most trees never build it.
+    """
 
     __slots__ = ("_children", "_cells")
     node_type = NodeType.CONTROL
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._cells: list[NodeCell] = []
-        self._children = ChildList((), self._cells)
+        self._children: ChildList | None = None
         super().__init__(name, config)
 
     @property
     def children(self) -> list[TreeNode]:
-        return self._children
+        children = self._children
+        if children is None:
+            children = self._children = ChildList([cell.node for cell in self._cells], self._cells)
+        return children
 
     @children.setter
     def children(self, nodes: Iterable[TreeNode]) -> None:
@@ -719,10 +823,12 @@ class ControlNode(TreeNode):
         self._children = ChildList(nodes, self._cells)
 
     def add_child(self, child: TreeNode) -> None:
-        self._children.append(child)
+        if self._children is not None:
+            list.append(self._children, child)  # self.children.append(child), one call less
+        self._cells.append(child._cell)
 
     def children_nodes(self) -> list[TreeNode]:
-        return self._children
+        return self.children
 
     def reset_children(self) -> None:
         """Halt RUNNING children, then set every child IDLE (BT.CPP resetChildren)."""
@@ -819,6 +925,8 @@ _LIBRARY_EXECUTE_TICKS = (TreeNode.execute_tick, SyncActionNode.execute_tick, De
 
 class SimpleDecoratorNode(DecoratorNode):
     """``register_simple_decorator``: returns ``fn(child_status, node)``."""
+
+    __slots__ = ("_fn",)
 
     def __init__(self, name: str, config: NodeConfig,
                  fn: Callable[[NodeStatus, TreeNode], NodeStatus]):

@@ -29,7 +29,7 @@ class IfThenElseNode(ControlNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        children = self._children
+        children = self.children
         n = len(children)
         if n != 2 and n != 3:
             raise LogicError("IfThenElseNode must have either 2 or 3 children")
@@ -63,7 +63,7 @@ class WhileDoElseNode(ControlNode):
     """Reactive if/else: the condition is ticked every tick and switches branches."""
 
     def tick(self) -> NodeStatus:
-        children = self._children
+        children = self.children
         n = len(children)
         if n != 2 and n != 3:
             raise LogicError("WhileDoElseNode must have either 2 or 3 children")
@@ -137,7 +137,7 @@ class SwitchNode(ControlNode):
 
     def tick(self) -> NodeStatus:
         k = self.num_cases
-        children = self._children
+        children = self.children
         if len(children) != k + 1:
             raise LogicError("Wrong number of children in SwitchNode; must be (num_cases + default)")
         match = k
@@ -187,7 +187,7 @@ class TryCatchNode(ControlNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        children = self._children
+        children = self.children
         n = len(children)
         if n < 2:
             raise LogicError(f"[{self.name}]: TryCatch requires at least 2 children")
@@ -228,7 +228,7 @@ class TryCatchNode(ControlNode):
 
     def halt(self) -> None:
         catch_on_halt = bool(self.get_input("catch_on_halt", False))
-        children = self._children
+        children = self.children
         if (catch_on_halt and not self._in_catch and self._cell.status is not IDLE and len(children) >= 2):
             for i in range(len(children) - 1):
                 self.halt_child(i)

@@ -45,7 +45,7 @@ class ParallelNode(ControlNode):
             f_raw = int(self.get_input("failure_count"))
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [failure_count] in ParallelNode") from None
-        children = self._children
+        children = self.children
         n = len(children)
         s_eff = _effective(s_raw, n)
         f_eff = _effective(f_raw, n)
@@ -105,7 +105,7 @@ class ParallelAllNode(ControlNode):
             max_failures = int(self.get_input("max_failures"))
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [max_failures] in ParallelNode") from None
-        children = self._children
+        children = self.children
         n = len(children)
         threshold = _effective(max_failures, n)
         if n < threshold:

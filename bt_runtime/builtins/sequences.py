@@ -19,6 +19,13 @@ def _idle_child(node: ControlNode) -> LogicError:
     return LogicError(f"[{node.name}]: A children should not return IDLE")
 
 
+# (fallback, asynch) -> (_advance_on, _stop_on, _all_done, kind)
+_VARIANTS = {(False, False): (SUCCESS, FAILURE, SUCCESS, "Sequence"),
+             (False, True): (SUCCESS, FAILURE, SUCCESS, "AsyncSequence"),
+             (True, False): (FAILURE, SUCCESS, FAILURE, "Fallback"),
+             (True, True): (FAILURE, SUCCESS, FAILURE, "AsyncFallback")}
+
+
 class SequentialNode(ControlNode):
     """Sequence, Fallback and their Async variants are one algorithm: tick children in
     order, remembering the current index; ``_advance_on`` moves to the next child,
@@ -33,12 +40,8 @@ class SequentialNode(ControlNode):
                  asynch: bool = False):
         self._idx = 0
         self._skipped = 0
-        if fallback:
-            self._advance_on, self._stop_on, self._all_done = FAILURE, SUCCESS, FAILURE
-        else:
-            self._advance_on, self._stop_on, self._all_done = SUCCESS, FAILURE, SUCCESS
+        self._advance_on, self._stop_on, self._all_done, self.kind = _VARIANTS[fallback, asynch]
         self._asynch = asynch
-        self.kind = ("Async" if asynch else "") + ("Fallback" if fallback else "Sequence")
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
@@ -254,7 +257,7 @@ class SequenceWithMemoryNode(ControlNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        children = self._children
+        children = self.children
         n = len(children)
         current = self._cell.status
         if current is not RUNNING:

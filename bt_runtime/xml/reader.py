@@ -140,7 +140,10 @@ def parse_xml_text(text: str | bytes, file: str | None = None) -> XMLDocument:
         text = "\n" * decl.group(0).count("\n") + text[decl.end():]
     if not text.strip():
         raise XMLLoadError("Error parsing the XML: empty document", file=file, line=1)
-    fixed, starts, removed = _make_lenient(text)
+    if _NEEDS_FIX.search(text) is None:  # no attribute value anywhere needs escaping (the rule)
+        fixed, starts, removed = text, [], []
+    else:
+        fixed, starts, removed = _make_lenient(text)
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
                              huge_tree=False, remove_comments=True, remove_pis=True)
     try:
