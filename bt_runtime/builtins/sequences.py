@@ -226,9 +226,66 @@ class SequentialNode(ControlNode):
             cell.status = IDLE  # notifies if observed (and changed)
         return status
 
+    def _tick_single(self) -> NodeStatus:
+        """``_tick_sequence``/``_tick_fallback`` for a node with a single child (common as a
+        wrapper, e.g. for pre/post-conditions): the loop and the reset unrolled, with the same
+        outcomes in the same order. With other than one child it hands over to the loop (and
+        makes the loop what parents call from then on)."""
+        cells = self._cells
+        if len(cells) != 1 or self._idx:
+            loop = self._tick_sequence if self._advance_on is SUCCESS else self._tick_fallback
+            if len(cells) != 1:
+                self._cell.fast = loop  # children were added after the node was built
+            return loop()
+        cell = self._cell
+        status = cell.status
+        if status is IDLE:
+            if self._skipped:
+                self._skipped = 0
+            cell.status = RUNNING  # notifies if observed
+        elif status is not RUNNING:
+            cell.status = RUNNING
+        cell = cells[0]
+        # -- tick the child (node.tick_cell, inlined for speed) ---------------------------------
+        fast = cell.fast
+        try:
+            status = fast()
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            raise _wrap_error(cell, exc) from exc
+        # -----------------------------------------------------------------------------------------
+        if status is self._stop_on:
+            cell.status = status
+        elif status is self._advance_on or status is SKIPPED:  # the loop completes
+            if status is SKIPPED:
+                self._skipped += 1
+            else:
+                cell.status = status
+            status = self._all_done
+            if self._skipped:
+                if self._skipped == 1:
+                    status = SKIPPED
+                self._skipped = 0
+        elif status is RUNNING:
+            cell.status = status
+            self._idx = 0
+            return RUNNING
+        else:
+            if status is IDLE:
+                cell.node.set_status(status)  # raises
+            cell.status = status
+            raise _idle_child(self)
+        if cell.status is RUNNING:  # reset_children()
+            cell.node.halt_node()
+        cell.status = IDLE
+        return status
+
     def _bare_tick(self) -> Callable[[], NodeStatus]:
         if self._asynch:
             return self.tick
+        if len(self._cells) <= 1:  # (while it is being built, too: see _tick_single)
+            return self._tick_single
         return self._tick_sequence if self._advance_on is SUCCESS else self._tick_fallback
 
     def halt(self) -> None:
