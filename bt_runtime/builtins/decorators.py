@@ -4,7 +4,7 @@ RetryUntilSuccessful, RunOnce, Precondition, SubTree (spec 4.3, 4.4)."""
 from __future__ import annotations
 
 from ..errors import BTRuntimeError, LogicError, NodeExecutionError
-from ..node import DecoratorNode, NodeConfig, _wrap_error, tick_cell
+from ..node import DecoratorNode, NodeConfig, _is_execute_tick, _wrap_error, tick_cell
 from ..ports import BOOL, PortInfo, input_port
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType, PortDirection
 
@@ -22,11 +22,11 @@ class InverterNode(DecoratorNode):
         # -- status = tick_cell(child), inlined for speed ------------------------------------
         fast = child.fast
         try:
-            status = fast()
+            status = fast(child.node)
         except NodeExecutionError:
             raise
         except Exception as exc:
-            if fast == child.node.execute_tick:  # not the bare tick: execute_tick's own error
+            if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
                 raise
             raise _wrap_error(child, exc) from exc
         if status is not SKIPPED:

@@ -22,7 +22,10 @@ class ReactiveNode(ControlNode):
         self._running_child = -1
         self._stop_on, self._otherwise = (SUCCESS, FAILURE) if fallback else (FAILURE, SUCCESS)
         self._label = "ReactiveFallback" if fallback else "ReactiveSequence"
-        super().__init__(name, config)
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            ControlNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
 
     @classmethod
     def enable_exception(cls, enable: bool) -> None:
@@ -44,7 +47,7 @@ class ReactiveNode(ControlNode):
             # -- tick the child and store its status (node.tick_cell, inlined for speed) --
             fast = child.fast
             try:
-                status = fast()
+                status = fast(child.node)
             except NodeExecutionError:
                 raise
             except Exception as exc:

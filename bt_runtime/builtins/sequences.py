@@ -42,7 +42,10 @@ class SequentialNode(ControlNode):
         self._skipped = 0
         self._advance_on, self._stop_on, self._all_done, self.kind = _VARIANTS[fallback, asynch]
         self._asynch = asynch
-        super().__init__(name, config)
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            ControlNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
         cell = self._cell
@@ -62,7 +65,7 @@ class SequentialNode(ControlNode):
             # -- tick the child and store its status (node.tick_cell, inlined for speed) --
             fast = child.fast
             try:
-                status = fast()
+                status = fast(child.node)
             except NodeExecutionError:
                 raise
             except Exception as exc:
@@ -128,7 +131,7 @@ class SequentialNode(ControlNode):
             # -- tick the child and store its status (node.tick_cell, inlined for speed) --
             fast = cell.fast
             try:
-                status = fast()
+                status = fast(cell.node)
             except NodeExecutionError:
                 raise
             except Exception as exc:
@@ -186,7 +189,7 @@ class SequentialNode(ControlNode):
             # -- tick the child and store its status (node.tick_cell, inlined for speed) --
             fast = cell.fast
             try:
-                status = fast()
+                status = fast(cell.node)
             except NodeExecutionError:
                 raise
             except Exception as exc:
@@ -233,10 +236,11 @@ class SequentialNode(ControlNode):
         makes the loop what parents call from then on)."""
         cells = self._cells
         if len(cells) != 1 or self._idx:
-            loop = self._tick_sequence if self._advance_on is SUCCESS else self._tick_fallback
+            cls = type(self)
+            loop = cls._tick_sequence if self._advance_on is SUCCESS else cls._tick_fallback
             if len(cells) != 1:
                 self._cell.fast = loop  # children were added after the node was built
-            return loop()
+            return loop(self)
         cell = self._cell
         status = cell.status
         if status is IDLE:
@@ -249,7 +253,7 @@ class SequentialNode(ControlNode):
         # -- tick the child (node.tick_cell, inlined for speed) ---------------------------------
         fast = cell.fast
         try:
-            status = fast()
+            status = fast(cell.node)
         except NodeExecutionError:
             raise
         except Exception as exc:
@@ -281,12 +285,13 @@ class SequentialNode(ControlNode):
         cell.status = IDLE
         return status
 
-    def _bare_tick(self) -> Callable[[], NodeStatus]:
+    def _bare_tick(self) -> Callable[[SequentialNode], NodeStatus]:
+        cls = type(self)
         if self._asynch:
-            return self.tick
+            return cls.tick
         if len(self._cells) <= 1:  # (while it is being built, too: see _tick_single)
-            return self._tick_single
-        return self._tick_sequence if self._advance_on is SUCCESS else self._tick_fallback
+            return cls._tick_single
+        return cls._tick_sequence if self._advance_on is SUCCESS else cls._tick_fallback
 
     def halt(self) -> None:
         self._idx = 0

@@ -33,7 +33,7 @@ from ..status import PortDirection
 from ..timers import TimerQueue, WakeUpSignal
 from ..tree import SubtreeRecord, Tree
 from .document import EXPLICIT_TAGS, TreeDefinition, suggest
-from .reader import XMLDocument
+from .reader import XMLDocument, element_children
 
 if TYPE_CHECKING:
     from ..factory import BehaviorTreeFactory
@@ -42,7 +42,6 @@ PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")
 POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
 _CONDITION_NAMES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
 _node_config = NodeConfig._for_node
-_ONLY_NAME = ["name"]  # elem.keys() of a node with just an instance name
 _BAD_INSTANCE_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 _INT_RE = re.compile(r"-?[0-9]+")
 _DOUBLE_RE = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
@@ -134,12 +133,15 @@ class TreeBuilder:
         manifest = manifests.get(type_id)
         if manifest is None:
             raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
-        keys = elem.keys()
-        if not keys or keys == _ONLY_NAME:  # the common cases, without building a dict
+        items = elem.items()  # one lxml call (each costs about a microsecond)
+        if not items:  # the common cases (no attribute, or just a name) without building a dict
             attrs = None
-            name = elem.get("name", type_id)
+            name = type_id
+        elif len(items) == 1 and items[0][0] == "name":
+            attrs = None
+            name = items[0][1]
         else:
-            attrs = dict(elem.items())
+            attrs = dict(items)
             name = attrs.get("name", type_id)
         if _BAD_INSTANCE_CHAR.search(name) is not None:
             bad = self._check_instance_name(name)
@@ -175,9 +177,8 @@ class TreeBuilder:
             raise self._err(doc, elem, f"creating node '{path}' [{type_id}] failed: "
                                        f"{type(exc).__name__}: {exc}") from exc
         record.nodes.append(node)
-        for child_elem in elem:  # element_children(elem), without building the list
-            if isinstance(child_elem.tag, str):
-                node.add_child(self._build_node(child_elem, doc, record, prefix, stack))
+        for child_elem in element_children(elem):
+            node.add_child(self._build_node(child_elem, doc, record, prefix, stack))
         return node
 
     def _substitute(self, type_id: str, name: str, path: str,

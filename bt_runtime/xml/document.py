@@ -225,7 +225,7 @@ class TreeRegistry:
                                        "The XML is too deeply nested.")
         manifests = self.factory.manifests
         tag = elem.tag
-        children = element_children(elem) if len(elem) else []
+        children = element_children(elem)
         if tag == "SubTree":
             if children:
                 raise self._err(doc, elem, f"<SubTree> with ID '{elem.get('ID')}' should not have any child")
