@@ -143,7 +143,8 @@ class TreeBuilder:
         else:
             attrs = dict(items)
             name = attrs.get("name", type_id)
-        if _BAD_INSTANCE_CHAR.search(name) is not None:
+        # (every forbidden character is unprintable; isprintable() costs far less than the search)
+        if not name.isprintable() and _BAD_INSTANCE_CHAR.search(name) is not None:
             bad = self._check_instance_name(name)
             raise self._err(doc, elem, f"The instance name '{name!r}' contains the forbidden character {bad!r}")
         self._uid = uid = self._uid + 1  # _next_uid(), inlined
