@@ -234,22 +234,24 @@ class SequentialNode(ControlNode):
         wrapper, e.g. for pre/post-conditions): the loop and the reset unrolled, with the same
         outcomes in the same order. With other than one child it hands over to the loop (and
         makes the loop what parents call from then on)."""
-        cells = self._cells
-        if len(cells) != 1 or self._idx:
+        try:
+            (cell,) = self._cells  # the child's cell (unpacking is cheaper than a len() test)
+        except ValueError:
+            cell = None
+        if cell is None or self._idx:
             cls = type(self)
             loop = cls._tick_sequence if self._advance_on is SUCCESS else cls._tick_fallback
-            if len(cells) != 1:
+            if cell is None:
                 self._cell.fast = loop  # children were added after the node was built
             return loop(self)
-        cell = self._cell
-        status = cell.status
+        own = self._cell
+        status = own.status
         if status is IDLE:
             if self._skipped:
                 self._skipped = 0
-            cell.status = RUNNING  # notifies if observed
+            own.status = RUNNING  # notifies if observed
         elif status is not RUNNING:
-            cell.status = RUNNING
-        cell = cells[0]
+            own.status = RUNNING
         # -- tick the child (node.tick_cell, inlined for speed) ---------------------------------
         fast = cell.fast
         try:
