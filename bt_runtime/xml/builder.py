@@ -32,8 +32,8 @@ from ..ports import (
 from ..status import PortDirection
 from ..timers import TimerQueue, WakeUpSignal
 from ..tree import SubtreeRecord, Tree
-from .document import EXPLICIT_TAGS, TreeDefinition, suggest
-from .reader import XMLDocument, element_children
+from .document import EXPLICIT_TAG_SET, TreeDefinition, suggest
+from .reader import ELEMENT, XMLDocument
 
 if TYPE_CHECKING:
     from ..factory import BehaviorTreeFactory
@@ -127,7 +127,7 @@ class TreeBuilder:
         tag = elem.tag
         if tag == "SubTree":
             return self._build_subtree(elem, doc, record, prefix, stack)
-        type_id = elem.get("ID") if tag in EXPLICIT_TAGS else tag
+        type_id = elem.get("ID") if tag in EXPLICIT_TAG_SET else tag
         factory = self.factory
         manifests = factory.manifests
         manifest = manifests.get(type_id)
@@ -178,8 +178,11 @@ class TreeBuilder:
             raise self._err(doc, elem, f"creating node '{path}' [{type_id}] failed: "
                                        f"{type(exc).__name__}: {exc}") from exc
         record.nodes.append(node)
-        for child_elem in element_children(elem):
-            node.add_child(self._build_node(child_elem, doc, record, prefix, stack))
+        children = elem[:]  # element_children(elem), inlined: most nodes are leaves
+        if children:
+            for child_elem in children:
+                if type(child_elem) is ELEMENT or isinstance(child_elem.tag, str):
+                    node.add_child(self._build_node(child_elem, doc, record, prefix, stack))
         return node
 
     def _substitute(self, type_id: str, name: str, path: str,

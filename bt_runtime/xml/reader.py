@@ -162,7 +162,7 @@ def element_children(element: etree._Element) -> list[etree._Element]:
     children = element[:]  # one call: iterating the element costs a microsecond per child
     if not children:
         return children
-    return [c for c in children if type(c) is _ELEMENT or isinstance(c.tag, str)]
+    return [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
 
 
-_ELEMENT = etree._Element  # what a plain parsed element is (comments and PIs are subclasses)
+ELEMENT = etree._Element  # what a plain parsed element is (comments and PIs are subclasses)
