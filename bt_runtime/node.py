@@ -222,6 +222,11 @@ class TreeNode:
     node_type: ClassVar[NodeType] = NodeType.UNDEFINED
     description: ClassVar[str] = ""
     _bare_tick_ok: ClassVar[bool] = True
+    # Rarely set: class-level defaults, an instance attribute once set (fewer stores per node).
+    _subscribers: list[StatusCallback] | tuple[()] = ()  # a list once someone subscribes
+    _pre_hook: PreTickHook | None = None
+    _post_hook: PostTickHook | None = None
+    _monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
     # True when the class's MRO is a single-inheritance chain: then super().__init__ in any
     # __init__ of the chain is the direct base's __init__, which the hot constructors call
     # directly (super() costs about a microsecond in CPython 3.11, per node built).
@@ -230,11 +235,6 @@ class TreeNode:
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         cls._linear_mro = all(len(c.__bases__) <= 1 for c in cls.__mro__)
-    # Rarely set: class-level defaults, an instance attribute once set (fewer stores per node).
-    _subscribers: list[StatusCallback] | tuple[()] = ()  # a list once someone subscribes
-    _pre_hook: PreTickHook | None = None
-    _post_hook: PostTickHook | None = None
-    _monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self.name = name
