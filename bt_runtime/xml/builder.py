@@ -93,12 +93,9 @@ class TreeBuilder:
 
     def _config(self, manifest: TreeNodeManifest, bb: Blackboard, uid: int, path: str,
                 doc: XMLDocument, elem: etree._Element) -> NodeConfig:
-        line = elem.sourceline  # doc.line_of(elem), without a call when no line was remapped
-        if line is not None and doc._line_starts:
-            line = doc.original_line(line)
         factory = self.factory
         return _node_config(bb, factory.enums, manifest, uid, path, factory.context, self.wake_up,
-                            self.timers, self.clock_holder[0], doc.file, line)
+                            self.timers, self.clock_holder[0], doc.file, doc.line_of(elem))
 
     def _compile_conditions(self, cfg: NodeConfig, attrs: dict[str, str], doc: XMLDocument,
                             elem: etree._Element) -> None:
@@ -155,11 +152,9 @@ class TreeBuilder:
             builder, manifest = self._substitute(type_id, name, path, manifest)
         else:
             builder = factory.builders[type_id]
-        line = elem.sourceline  # self._config(...), inlined: this runs once per node
-        if line is not None and doc._line_starts:
-            line = doc.original_line(line)
+        # self._config(...), inlined: this runs once per node
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
-                           self.wake_up, self.timers, self.clock_holder[0], doc.file, line)
+                           self.wake_up, self.timers, self.clock_holder[0], doc.file, doc.line_of(elem))
         # Port passes only when there is something to do (most nodes have no port attributes).
         given = () if attrs is None else self._assign_ports(cfg, manifest, attrs, doc, elem)
         if manifest.ports:

@@ -46,8 +46,8 @@ class XMLDocument:
     def line_of(self, element: etree._Element) -> int | None:
         """The element's line in the original text."""
         line = element.sourceline
-        if line is None:
-            return None
+        if line is None or not self._line_starts:  # (no line was remapped: the usual case)
+            return line
         return self.original_line(line)
 
     def original_line(self, processed_line: int) -> int:
