@@ -29,8 +29,10 @@ _VARIANTS = {(False, False): (SUCCESS, FAILURE, SUCCESS, "Sequence"),
 class SequentialNode(ControlNode):
     """Sequence, Fallback and their Async variants are one algorithm: tick children in
     order, remembering the current index; ``_advance_on`` moves to the next child,
-    ``_stop_on`` ends the node. One class (configured per instance) keeps the attribute
-    sites in this hot loop monomorphic, which CPython's specializer rewards."""
+    ``_stop_on`` ends the node. ``tick()`` is the reference implementation (and the async
+    variants' fast path); parents of a plain Sequence/Fallback call ``_tick_sequence`` /
+    ``_tick_fallback`` (the same loop, constants, no yield rule) or, for a single child,
+    ``_tick_single``. The hot loops read the children's cells only (node.NodeCell)."""
 
     # Hot attributes live in slots: CPython 3.11 reads slots much faster than class
     # constants looked up through an instance that also has a __dict__.
@@ -114,9 +116,10 @@ class SequentialNode(ControlNode):
         return status
 
     def _tick_sequence(self) -> NodeStatus:
-        """``tick()`` for Sequence and Fallback (not async): the same loop without the yield
-        rule, so it need not read the child's previous status. What parents call (``_fast``).
-        (Few local variables on purpose: a smaller frame is a cheaper call.)"""
+        """``tick()`` for a Sequence (not async): the same loop without the yield rule, so it
+        need not read the child's previous status, and with the outcomes as constants. What
+        parents call (``_cell.fast``). (Few local variables on purpose: a smaller frame is a
+        cheaper call.)"""
         cell = self._cell
         status = cell.status
         if status is IDLE:
@@ -172,9 +175,7 @@ class SequentialNode(ControlNode):
         return status
 
     def _tick_fallback(self) -> NodeStatus:
-        """``tick()`` for Sequence and Fallback (not async): the same loop without the yield
-        rule, so it need not read the child's previous status. What parents call (``_fast``).
-        (Few local variables on purpose: a smaller frame is a cheaper call.)"""
+        """``_tick_sequence`` for a Fallback: the same code with SUCCESS and FAILURE swapped."""
         cell = self._cell
         status = cell.status
         if status is IDLE:
