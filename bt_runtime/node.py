@@ -5,6 +5,12 @@ pre-conditions, calls ``tick()``, runs post-conditions, and stores the status (S
 returned but never stored). Nodes with no pre/post scripts and no hooks take a fast path: the
 per-tick cost of the common case is one Python call per node plus a status store.
 
+Hot state lives in a ``NodeCell`` per node (status and the callable a parent ticks), one
+shared type whatever the node's class, so the attribute sites of the parents' loops stay
+monomorphic (CPython 3.11 specializes them per type). An observed node's cell is an
+``ObservedCell``, whose ``status`` setter notifies the subscribers: stores never need to
+check for observers.
+
 User node kinds: SyncActionNode, ConditionNode, StatefulActionNode (on_start / on_running /
 on_halted), AsyncActionNode (``async def run(self)``: started on the first tick, polled each
 tick, cancelled on halt), ControlNode, DecoratorNode. A tick never awaits.
@@ -14,7 +20,8 @@ from __future__ import annotations
 
 import asyncio
 import functools
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
+from types import MappingProxyType, MethodType
 from typing import Any, ClassVar
 
 from .blackboard import Blackboard
@@ -33,11 +40,15 @@ _MISSING: Any = object()
 
 
 class NodeConfig:
-    """Everything a node gets at creation: blackboard, port remappings, identity, services."""
+    """Everything a node gets at creation: blackboard, port remappings, identity, services.
+
+    ``pre_conditions``, ``post_conditions`` and ``other_attributes`` are usually empty: they
+    are created on first use (reading one returns a dict you may fill).
+    """
 
     __slots__ = ("blackboard", "enums", "input_ports", "output_ports", "manifest", "uid", "path",
-                 "pre_conditions", "post_conditions", "other_attributes", "context", "wake_up",
-                 "timers", "clock", "registration_id", "source")
+                 "_pre", "_post", "_other", "context", "wake_up", "timers", "clock",
+                 "registration_id", "_file", "_line")
 
     def __init__(self, blackboard: Blackboard | None = None, *, input_ports: dict[str, str] | None = None,
                  output_ports: dict[str, str] | None = None, enums: dict[str, int] | None = None,
@@ -57,15 +68,125 @@ class NodeConfig:
         self.manifest = manifest
         self.uid = uid
         self.path = path
-        self.pre_conditions: dict[str, Any] = {}
-        self.post_conditions: dict[str, Any] = {}
-        self.other_attributes: dict[str, str] = {}
+        self._pre = self._post = self._other = None
         self.context = context
         self.wake_up: WakeUpSignal = wake_up
         self.timers: TimerQueue = timers
         self.clock: Callable[[], float] = clock or timers.clock
         self.registration_id = manifest.registration_id if manifest else ""
-        self.source: tuple[str | None, int | None] = (None, None)  # (file, line) for messages
+        self._file: str | None = None
+        self._line: int | None = None
+
+    @classmethod
+    def _for_node(cls, blackboard: Blackboard, enums: dict[str, int], manifest: TreeNodeManifest,
+                  uid: int, path: str, context: Any, wake_up: WakeUpSignal, timers: TimerQueue,
+                  clock: Callable[[], float], file: str | None, line: int | None) -> NodeConfig:
+        """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
+        positional arguments (much cheaper than the keyword call, once per node).
+
+        A node type that declares no ports can never have port remappings: its
+        ``input_ports``/``output_ports`` are one shared, read-only empty mapping (two dicts
+        fewer per node; most nodes of a tree are of such types)."""
+        self = _new_object(cls)
+        self.blackboard = blackboard
+        self.enums = enums
+        if manifest.ports:
+            self.input_ports = {}
+            self.output_ports = {}
+        else:
+            self.input_ports = self.output_ports = _NO_PORTS
+        self.manifest = manifest
+        self.uid = uid
+        self.path = path
+        self._pre = self._post = self._other = None
+        self.context = context
+        self.wake_up = wake_up
+        self.timers = timers
+        self.clock = clock
+        self.registration_id = manifest.registration_id
+        self._file = file
+        self._line = line
+        return self
+
+    @property
+    def source(self) -> tuple[str | None, int | None]:
+        """(file, line) of the node's element, for messages."""
+        return (self._file, self._line)
+
+    @source.setter
+    def source(self, value: tuple[str | None, int | None]) -> None:
+        self._file, self._line = value
+
+    @property
+    def pre_conditions(self) -> dict[str, Any]:
+        if self._pre is None:
+            self._pre = {}
+        return self._pre
+
+    @pre_conditions.setter
+    def pre_conditions(self, value: dict[str, Any]) -> None:
+        self._pre = value
+
+    @property
+    def post_conditions(self) -> dict[str, Any]:
+        if self._post is None:
+            self._post = {}
+        return self._post
+
+    @post_conditions.setter
+    def post_conditions(self, value: dict[str, Any]) -> None:
+        self._post = value
+
+    @property
+    def other_attributes(self) -> dict[str, str]:
+        if self._other is None:
+            self._other = {}
+        return self._other
+
+    @other_attributes.setter
+    def other_attributes(self, value: dict[str, str]) -> None:
+        self._other = value
+
+
+_new_object = object.__new__
+_NO_PORTS: Mapping[str, str] = MappingProxyType({})
+
+
+class NodeCell:
+    """The hot state of one node, shared with its parent: ``status``, and ``fast``, what a
+    parent calls as ``fast(node)`` to tick it.
+
+    ``fast`` is the bare ``tick`` when the node has no pre/post-condition scripts and no hooks
+    (the parent then stores the result in ``status`` itself, see ``tick_cell``), otherwise the
+    full ``execute_tick``: a plain function of the node, so that building a node does not make
+    a bound method (fewer objects for the garbage collector). Every node has exactly one cell
+    for its whole life; parents keep lists of their children's cells.
+    """
+
+    __slots__ = ("status", "fast", "node")
+    # No __init__: TreeNode.__init__ fills the slots (a class without __init__ is the
+    # cheapest object to make).
+
+
+_status_slot = NodeCell.__dict__["status"]
+_raw_get_status = _status_slot.__get__  # (cell) -> status, whatever the cell's class
+_raw_set_status = _status_slot.__set__  # (cell, status): store without notifying
+
+
+def _observed_set_status(cell: NodeCell, new: NodeStatus) -> None:
+    prev = _raw_get_status(cell)
+    if prev is not new:
+        _raw_set_status(cell, new)
+        cell.node._notify(prev, new)
+
+
+class ObservedCell(NodeCell):
+    """The cell of a node with status subscribers: a change of ``status`` notifies them
+    synchronously (BT.CPP setStatus/resetStatus). Cells switch class in place, so parents'
+    references stay valid."""
+
+    __slots__ = ()
+    status = property(_raw_get_status, _observed_set_status)  # type: ignore[assignment]
 
 
 class TreeNodeManifest:
@@ -90,29 +211,48 @@ class TreeNodeManifest:
 class TreeNode:
     """Base of every node. Subclasses implement ``tick()`` (and ``halt()`` when stateful).
 
-    ``_fast`` is what a parent calls to tick this node: the bare ``tick`` when the node has
-    no pre/post-condition scripts and no hooks (the parent then stores the status itself,
-    saving a Python call per node), otherwise the full ``execute_tick``. Classes whose BT.CPP
-    ``executeTick`` does extra work (decorators, sync actions) set ``_bare_tick_ok = False``.
+    ``_cell`` holds the node's status and ``fast``, what a parent calls to tick this node:
+    the bare ``tick`` when the node has no pre/post-condition scripts and no hooks (the parent
+    then stores the status itself, saving a Python call per node), otherwise the full
+    ``execute_tick``. Classes whose BT.CPP ``executeTick`` does extra work (decorators, sync
+    actions) set ``_bare_tick_ok = False``. ``_status`` and ``_fast`` remain as properties
+    over the cell; a raw ``_status`` store does not notify, as before.
     """
 
-    __slots__ = ("name", "config", "_status", "_subscribers", "_pre_hook", "_post_hook", "_monitor",
-                 "_input_cache", "_fast", "__dict__", "__weakref__")
+    __slots__ = ("name", "config", "_cell", "_input_cache", "__dict__", "__weakref__")
 
     node_type: ClassVar[NodeType] = NodeType.UNDEFINED
     description: ClassVar[str] = ""
     _bare_tick_ok: ClassVar[bool] = True
+    # Rarely set: class-level defaults, an instance attribute once set (fewer stores per node).
+    _subscribers: list[StatusCallback] | tuple[()] = ()  # a list once someone subscribes
+    _pre_hook: PreTickHook | None = None
+    _post_hook: PostTickHook | None = None
+    _monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
+    # True when the class's MRO is a single-inheritance chain: then super().__init__ in any
+    # __init__ of the chain is the direct base's __init__, which the hot constructors call
+    # directly (super() costs about a microsecond in CPython 3.11, per node built).
+    _linear_mro: ClassVar[bool] = True
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._linear_mro = all(len(c.__bases__) <= 1 for c in cls.__mro__)
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self.name = name
-        self.config = config if config is not None else NodeConfig()
-        self._status = IDLE
-        self._subscribers: list[StatusCallback] = []
-        self._pre_hook: PreTickHook | None = None
-        self._post_hook: PostTickHook | None = None
-        self._monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
-        self._input_cache: dict[str, Any] = {}
-        self._select_execute_tick()
+        if config is None:
+            config = NodeConfig()
+        self.config = config
+        self._cell = cell = NodeCell()
+        cell.status = IDLE
+        cell.node = self
+        self._input_cache: dict[str, Any] | None = None  # literal inputs, converted once
+        if config._pre or config._post:
+            self._select_execute_tick()
+        else:  # _select_execute_tick() without hooks, inlined: this runs once per node built
+            execute_tick = type(self).execute_tick
+            bare = self._bare_tick_ok and execute_tick in _LIBRARY_EXECUTE_TICKS
+            cell.fast = self._bare_tick() if bare else execute_tick
 
     # -- declaration ---------------------------------------------------------------------------
     @classmethod
@@ -126,7 +266,20 @@ class TreeNode:
     # -- identity ------------------------------------------------------------------------------
     @property
     def status(self) -> NodeStatus:
-        return self._status
+        return self._cell.status
+
+    @property
+    def _status(self) -> NodeStatus:
+        return self._cell.status
+
+    @_status.setter
+    def _status(self, value: NodeStatus) -> None:
+        _raw_set_status(self._cell, value)  # raw: no notification (use set_status for that)
+
+    @property
+    def _fast(self) -> Callable[[], NodeStatus]:
+        """What a parent calls to tick this node (``_cell.fast`` bound to the node)."""
+        return MethodType(self._cell.fast, self)
 
     @property
     def uid(self) -> int:
@@ -163,18 +316,10 @@ class TreeNode:
         if new_status is IDLE:
             raise LogicError(f"Node [{self.name}]: you are not allowed to set manually the status to "
                              "IDLE. If you know what you are doing (?) use resetStatus() instead.")
-        prev = self._status
-        if prev is not new_status:
-            self._status = new_status
-            if self._subscribers:
-                self._notify(prev, new_status)
+        self._cell.status = new_status  # an ObservedCell notifies on change
 
     def reset_status(self) -> None:
-        prev = self._status
-        if prev is not IDLE:
-            self._status = IDLE
-            if self._subscribers:
-                self._notify(prev, IDLE)
+        self._cell.status = IDLE
 
     def _notify(self, prev: NodeStatus, new: NodeStatus) -> None:
         stamp = self.config.clock()
@@ -183,11 +328,16 @@ class TreeNode:
 
     def subscribe_to_status_change(self, callback: StatusCallback) -> Callable[[], None]:
         """Call ``callback(timestamp, node, previous, new)`` synchronously on every change."""
+        if not isinstance(self._subscribers, list):
+            self._subscribers = list(self._subscribers)
         self._subscribers.append(callback)
+        self._cell.__class__ = ObservedCell
 
         def unsubscribe() -> None:
             if callback in self._subscribers:
                 self._subscribers.remove(callback)
+                if not self._subscribers:
+                    self._cell.__class__ = NodeCell
 
         return unsubscribe
 
@@ -207,16 +357,18 @@ class TreeNode:
     def _select_execute_tick(self) -> None:
         """Choose the fast path when there is nothing but ``tick()`` to run."""
         cfg = self.config
-        if (cfg.pre_conditions or cfg.post_conditions or self._pre_hook or self._post_hook
-                or self._monitor):
+        if cfg._pre or cfg._post or self._pre_hook or self._post_hook or self._monitor:
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
-            self._fast = self._execute_tick_full
+            self._cell.fast = type(self)._execute_tick_full
         else:
             self.__dict__.pop("execute_tick", None)
-            self._fast = self._bare_tick() if self._bare_tick_ok else self.execute_tick
+            execute_tick = type(self).execute_tick
+            bare = self._bare_tick_ok and execute_tick in _LIBRARY_EXECUTE_TICKS
+            self._cell.fast = self._bare_tick() if bare else execute_tick
 
-    def _bare_tick(self) -> Callable[[], NodeStatus]:
-        return self.tick
+    def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        """The function ``f`` with ``f(self)`` equivalent to ``self.tick()``."""
+        return type(self).tick
 
     def refresh_conditions(self) -> None:
         """Re-select the tick path after pre/post-conditions were set on the config."""
@@ -237,11 +389,10 @@ class TreeNode:
             raise
         except Exception as exc:
             raise NodeExecutionError(self.config.path, self.config.registration_id, exc) from exc
-        if status is not self._status:
-            if status is not SKIPPED:
-                self.set_status(status)
-        elif status is IDLE:
-            self.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+        if status is not SKIPPED:
+            if status is IDLE:
+                self.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+            self._cell.status = status  # an ObservedCell notifies on change
         return status
 
     def _execute_tick_full(self) -> NodeStatus:
@@ -278,15 +429,14 @@ class TreeNode:
             hooked = post(self, status)
             if hooked is SUCCESS or hooked is FAILURE:
                 status = hooked
-        if status is not self._status:
-            if status is not SKIPPED:
-                self.set_status(status)
-        elif status is IDLE:
-            self.set_status(status)
+        if status is not SKIPPED:
+            if status is IDLE:
+                self.set_status(status)  # raises
+            self._cell.status = status
         return status
 
     def _check_pre_conditions(self) -> NodeStatus | None:
-        pre = self.config.pre_conditions
+        pre = self.config._pre
         if not pre:
             return None
         bb = self.config.blackboard
@@ -313,7 +463,7 @@ class TreeNode:
         return None
 
     def _run_post_conditions(self, status: NodeStatus) -> None:
-        post = self.config.post_conditions
+        post = self.config._post
         if not post:
             return
         bb = self.config.blackboard
@@ -328,7 +478,8 @@ class TreeNode:
     def halt_node(self) -> None:
         """BT.CPP haltNode(): ``halt()`` then the ``_onHalted`` script."""
         self.halt()
-        script = self.config.post_conditions.get("_onHalted") if self.config.post_conditions else None
+        post = self.config._post
+        script = post.get("_onHalted") if post else None
         if script is not None:
             script.run(self.config.blackboard, self.config.enums)
 
@@ -374,9 +525,10 @@ class TreeNode:
 
     def _read_input(self, name: str) -> Any:
         cache = self._input_cache
-        cached = cache.get(name, _MISSING)
-        if cached is not _MISSING:
-            return cached
+        if cache is not None:
+            cached = cache.get(name, _MISSING)
+            if cached is not _MISSING:
+                return cached
         raw, port = self._raw_input(name)
         if not isinstance(raw, str):
             return raw  # a non-string default is returned as is
@@ -390,6 +542,8 @@ class TreeNode:
                     value = port.type.from_string(raw, cfg.enums)
                 except BehaviorTreeException as exc:
                     raise BTRuntimeError(f"getInput(): {exc}") from None
+            if cache is None:
+                cache = self._input_cache = {}
             cache[name] = value  # literals never change: convert once
             return value
         entry = cfg.blackboard.get_entry(key)
@@ -479,14 +633,19 @@ class SyncActionNode(ActionNodeBase):
 class SimpleActionNode(SyncActionNode):
     """``register_simple_action``: sets RUNNING first, then ``fn(node)`` (IDLE->RUNNING->result)."""
 
+    __slots__ = ("_fn",)
+
     def __init__(self, name: str, config: NodeConfig, fn: Callable[[TreeNode], NodeStatus]):
         self._fn = fn
-        super().__init__(name, config)
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            SyncActionNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
 
     _bare_tick_ok = True  # tick() makes the RUNNING check itself
 
     def tick(self) -> NodeStatus:
-        if self._status is IDLE:
+        if self._cell.status is IDLE:
             self.set_status(RUNNING)
         status = self._fn(self)
         if status is RUNNING:
@@ -497,15 +656,20 @@ class SimpleActionNode(SyncActionNode):
 class SimpleConditionNode(ConditionNode):
     """``register_simple_condition``: ``fn(node)`` each tick."""
 
+    __slots__ = ("_fn",)
+
     def __init__(self, name: str, config: NodeConfig, fn: Callable[[TreeNode], NodeStatus]):
         self._fn = fn
-        super().__init__(name, config)
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            ConditionNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
         return self._fn(self)
 
-    def _bare_tick(self) -> Callable[[], NodeStatus]:
-        return functools.partial(self._fn, self)  # one Python frame per tick instead of two
+    def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        return self._fn  # fn(node) is tick(): one Python frame per tick instead of two
 
 
 class StatefulActionNode(ActionNodeBase):
@@ -526,7 +690,7 @@ class StatefulActionNode(ActionNodeBase):
         return self._halt_requested
 
     def tick(self) -> NodeStatus:
-        status = self._status
+        status = self._cell.status
         if status is IDLE:
             result = self.on_start()
             if result is IDLE:
@@ -555,7 +719,10 @@ class SimpleStatefulActionNode(StatefulActionNode):
         self._on_start_fn = on_start
         self._on_running_fn = on_running
         self._on_halted_fn = on_halted
-        super().__init__(name, config)
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            StatefulActionNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
 
     def on_start(self) -> NodeStatus:
         return self._on_start_fn(self)
@@ -631,39 +798,102 @@ class AsyncActionNode(ActionNodeBase):
 # Control nodes and decorators
 # ---------------------------------------------------------------------------------------------
 
-class ControlNode(TreeNode):
-    """A node with an ordered list of children."""
+class ChildList(list):
+    """``ControlNode.children``: a list of nodes that keeps ``cells``, the parent's list of the
+    children's cells (what the hot loops read), in step however it is modified."""
 
-    __slots__ = ("children",)
+    __slots__ = ("cells",)
+
+    def __init__(self, items: Iterable[TreeNode] = (), cells: list[NodeCell] | None = None):
+        list.__init__(self, items)
+        self.cells = cells if cells is not None else []
+        self._sync()
+
+    def _sync(self) -> None:
+        try:
+            cells = self.cells
+        except AttributeError:  # a copy made without __init__ (copy.copy, pickle)
+            cells = self.cells = []
+        cells[:] = [child._cell for child in self]
+
+    def append(self, child: TreeNode) -> None:
+        list.append(self, child)
+        try:
+            self.cells.append(child._cell)
+        except AttributeError:
+            self._sync()
+
+
+def _synced(name: str) -> Callable[..., Any]:
+    method = getattr(list, name)
+
+    @functools.wraps(method)
+    def wrapper(self: ChildList, *args: Any, **kwargs: Any) -> Any:
+        result = method(self, *args, **kwargs)
+        self._sync()
+        return result
+
+    return wrapper
+
+
+for _name in ("extend", "insert", "remove", "pop", "clear", "sort", "reverse", "__setitem__",
+              "__delitem__", "__iadd__", "__imul__"):
+    setattr(ChildList, _name, _synced(_name))
+del _name
+
+
+class ControlNode(TreeNode):
+    """A node with an ordered list of children (``children``; ``_cells`` are their cells).
+
+    The ``children`` list is made on first use: the hot loops and the builder need only
+    ``_cells`` (each cell knows its node), so most trees never build it.
+    """
+
+    __slots__ = ("_children", "_cells")
     node_type = NodeType.CONTROL
 
     def __init__(self, name: str, config: NodeConfig | None = None):
-        self.children: list[TreeNode] = []
-        super().__init__(name, config)
+        self._cells: list[NodeCell] = []
+        self._children: ChildList | None = None
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            TreeNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
+
+    @property
+    def children(self) -> list[TreeNode]:
+        children = self._children
+        if children is None:
+            children = self._children = ChildList([cell.node for cell in self._cells], self._cells)
+        return children
+
+    @children.setter
+    def children(self, nodes: Iterable[TreeNode]) -> None:
+        self._cells = []
+        self._children = ChildList(nodes, self._cells)
 
     def add_child(self, child: TreeNode) -> None:
-        self.children.append(child)
+        if self._children is not None:
+            list.append(self._children, child)  # self.children.append(child), one call less
+        self._cells.append(child._cell)
 
     def children_nodes(self) -> list[TreeNode]:
         return self.children
 
     def reset_children(self) -> None:
         """Halt RUNNING children, then set every child IDLE (BT.CPP resetChildren)."""
-        for child in self.children:
-            status = child._status
+        for cell in self._cells:
+            status = cell.status
             if status is not IDLE:
                 if status is RUNNING:
-                    child.halt_node()
-                if child._subscribers:
-                    child.reset_status()
-                else:
-                    child._status = IDLE
+                    cell.node.halt_node()
+                cell.status = IDLE  # notifies if observed
 
     def halt_child(self, index: int) -> None:
-        child = self.children[index]
-        if child._status is RUNNING:
-            child.halt_node()
-        child.reset_status()
+        cell = self._cells[index]
+        if cell.status is RUNNING:
+            cell.node.halt_node()
+        cell.status = IDLE
 
     def halt(self) -> None:
         self.reset_children()
@@ -671,35 +901,49 @@ class ControlNode(TreeNode):
 
 
 class DecoratorNode(TreeNode):
-    """A node with exactly one child; a completed child is reset after the tick."""
+    """A node with exactly one child (``child``; ``_child_cell`` is its cell); a completed
+    child is reset after the tick."""
 
-    __slots__ = ("child",)
+    __slots__ = ("_child", "_child_cell")
     node_type = NodeType.DECORATOR
     # execute_tick resets a completed child afterwards; subclasses whose tick() always does
     # that itself may set _bare_tick_ok = True.
     _bare_tick_ok = False
 
     def __init__(self, name: str, config: NodeConfig | None = None):
-        self.child: TreeNode | None = None
-        super().__init__(name, config)
+        self._child: TreeNode | None = None
+        self._child_cell: NodeCell | None = None
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            TreeNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
+
+    @property
+    def child(self) -> TreeNode | None:
+        return self._child
+
+    @child.setter
+    def child(self, child: TreeNode | None) -> None:
+        self._child = child
+        self._child_cell = child._cell if child is not None else None
 
     def set_child(self, child: TreeNode) -> None:
-        if self.child is not None:
+        if self._child is not None:
             raise BehaviorTreeException("Decorator already has a child")
         self.child = child
 
     add_child = set_child
 
     def children_nodes(self) -> list[TreeNode]:
-        return [self.child] if self.child is not None else []
+        return [self._child] if self._child is not None else []
 
     def reset_child(self) -> None:
-        child = self.child
-        if child is None:
+        cell = self._child_cell
+        if cell is None:
             return
-        if child._status is RUNNING:
-            child.halt_node()
-        child.reset_status()
+        if cell.status is RUNNING:
+            cell.node.halt_node()
+        cell.status = IDLE
 
     halt_child = reset_child
 
@@ -709,25 +953,33 @@ class DecoratorNode(TreeNode):
 
     def execute_tick(self) -> NodeStatus:
         status = TreeNode.execute_tick(self)
-        child = self.child
-        if child is not None:
-            cs = child._status
+        cell = self._child_cell
+        if cell is not None:
+            cs = cell.status
             if cs is SUCCESS or cs is FAILURE:
-                child.reset_status()
+                cell.status = IDLE
         return status
 
     def _execute_tick_full(self) -> NodeStatus:
         status = TreeNode._execute_tick_full(self)
-        child = self.child
-        if child is not None:
-            cs = child._status
+        cell = self._child_cell
+        if cell is not None:
+            cs = cell.status
             if cs is SUCCESS or cs is FAILURE:
-                child.reset_status()
+                cell.status = IDLE
         return status
+
+
+# A class that overrides execute_tick (as BT.CPP allows: it is virtual) is always ticked
+# through it; the library's own overrides are known to be equivalent to the bare tick where
+# the class sets _bare_tick_ok.
+_LIBRARY_EXECUTE_TICKS = (TreeNode.execute_tick, SyncActionNode.execute_tick, DecoratorNode.execute_tick)
 
 
 class SimpleDecoratorNode(DecoratorNode):
     """``register_simple_decorator``: returns ``fn(child_status, node)``."""
+
+    __slots__ = ("_fn",)
 
     def __init__(self, name: str, config: NodeConfig,
                  fn: Callable[[NodeStatus, TreeNode], NodeStatus]):
@@ -738,31 +990,54 @@ class SimpleDecoratorNode(DecoratorNode):
         return self._fn(self.child.execute_tick(), self)
 
 
-def store_child_status(child: TreeNode, status: NodeStatus) -> None:
-    """What a parent does after calling ``child._fast()``: store the result like executeTick.
+def tick_cell(cell: NodeCell) -> NodeStatus:
+    """``cell.node.execute_tick()``, through the cell: tick the node and store the result
+    (SKIPPED is not stored, IDLE raises; spec 3.1). An error raised by ``tick()`` is wrapped
+    with the node's path (spec 3.7); one raised by execute_tick's own checks (IDLE, a sync
+    action returning RUNNING, scripts, hooks) is not, exactly as from execute_tick.
 
-    The hot control loops inline this (see sequences.py, reactive.py); keep them in sync.
+    This is the canonical child tick; decorators.py inlines it where it is hot. (The loops of
+    sequences.py and reactive.py also wrap errors from the checks of a non-bare child.)
     """
-    if status is not child._status:
-        if status is not SKIPPED:
-            if status is IDLE or child._subscribers:
-                child.set_status(status)
-            else:
-                child._status = status
-    elif status is IDLE:
-        child.set_status(status)
+    fast = cell.fast
+    try:
+        status = fast(cell.node)
+    except NodeExecutionError:
+        raise
+    except Exception as exc:
+        if _is_execute_tick(fast, cell.node):  # not the bare tick: execute_tick's own error
+            raise
+        raise _wrap_error(cell, exc) from exc
+    if status is not SKIPPED:
+        if status is IDLE:
+            cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+        cell.status = status
+    return status
+
+
+def _is_execute_tick(fast: Callable[[TreeNode], NodeStatus], node: TreeNode) -> bool:
+    """Is ``fast`` the node's execute_tick (which wraps tick()'s errors itself)?"""
+    cls = type(node)
+    return fast is cls.execute_tick or fast is cls._execute_tick_full
+
+
+def _wrap_error(cell: NodeCell, exc: Exception) -> NodeExecutionError:
+    config = cell.node.config
+    return NodeExecutionError(config.path, config.registration_id, exc)
+
+
+def store_child_status(child: TreeNode, status: NodeStatus) -> None:
+    """What a parent does after calling ``child._fast()``: store the result like executeTick
+    (``tick_cell`` does both)."""
+    if status is not SKIPPED:
+        if status is IDLE:
+            child.set_status(status)  # raises
+        child._cell.status = status
 
 
 def tick_child(child: TreeNode) -> NodeStatus:
     """Tick ``child`` through its fast path, wrapping errors with its path like executeTick."""
-    try:
-        status = child._fast()
-    except NodeExecutionError:
-        raise
-    except Exception as exc:
-        raise NodeExecutionError(child.config.path, child.config.registration_id, exc) from exc
-    store_child_status(child, status)
-    return status
+    return tick_cell(child._cell)
 
 
 def manifest_for(cls: type[TreeNode], registration_id: str, ports: Any = None,

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .errors import LogicError
+from .node import tick_cell
 from .status import FAILURE, IDLE, RUNNING, SUCCESS, NodeStatus
 from .timers import TimerQueue, WakeUpSignal
 
@@ -127,19 +128,19 @@ class Tree:
         return self._tick_root(_WHILE_RUNNING, sleep)
 
     def _tick_root(self, mode: int, sleep: float) -> NodeStatus:
-        root = self.root_node
+        cell = self.root_node._cell  # root.execute_tick() is tick_cell(cell) (node.py)
         timers = self.timers
         wake_up = self.wake_up
         status = IDLE
         while status is IDLE or (mode == _WHILE_RUNNING and status is RUNNING):
             if timers._heap:
                 timers.fire_due()
-            status = root.execute_tick()
+            status = tick_cell(cell)
             if mode != _EXACTLY_ONCE:
                 while status is RUNNING and wake_up.check_and_clear():
-                    status = root.execute_tick()
+                    status = tick_cell(cell)
             if status is SUCCESS or status is FAILURE:
-                root.reset_status()
+                cell.status = IDLE  # root.reset_status()
             if status is RUNNING and sleep > 0:
                 self.sleep(sleep)
         return status

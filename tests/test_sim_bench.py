@@ -16,8 +16,9 @@ def load_bench():
 
 def test_bench_drive_runs():
     bench = load_bench()
-    r = bench.drive(5.0)
-    assert 5.0 <= r["sim_seconds"] < 5.11 and 500 <= r["steps"] <= 511 and r["scans"] in (25, 26)
-    assert r["distance_m"] > 0.5 and r["collisions"] == 0
-    assert set(r["breakdown_s"]) == {"physics", "lidar", "other_sim", "loop_and_driver"}
-    assert r["rtf"] > 10  # a very loose floor; bench/sim.py prints the real figure
+    for make, parts in ((bench.navigated, {"planning", "control"}), (bench.scripted, set())):
+        r = bench.drive(5.0, make_driver=make)
+        assert 4.999 <= r["sim_seconds"] < 5.11 and 499 <= r["steps"] <= 511 and r["scans"] in (24, 25, 26)
+        assert r["distance_m"] > 0.5 and r["collisions"] == 0
+        assert set(r["breakdown_s"]) == {"physics", "lidar", "other_sim", "loop_and_rest"} | parts
+        assert r["rtf"] > 10  # a very loose floor; bench/sim.py prints the real figure

@@ -191,7 +191,7 @@ class TryCatchNode(ControlNode):
         n = len(children)
         if n < 2:
             raise LogicError(f"[{self.name}]: TryCatch requires at least 2 children")
-        if self._status is IDLE:
+        if self._cell.status is IDLE:
             self._skipped = 0
             self._in_catch = False
         self.set_status(RUNNING)
@@ -229,7 +229,7 @@ class TryCatchNode(ControlNode):
     def halt(self) -> None:
         catch_on_halt = bool(self.get_input("catch_on_halt", False))
         children = self.children
-        if (catch_on_halt and not self._in_catch and self._status is not IDLE and len(children) >= 2):
+        if (catch_on_halt and not self._in_catch and self._cell.status is not IDLE and len(children) >= 2):
             for i in range(len(children) - 1):
                 self.halt_child(i)
             if children[-1].execute_tick() is RUNNING:

@@ -3,8 +3,8 @@ RetryUntilSuccessful, RunOnce, Precondition, SubTree (spec 4.3, 4.4)."""
 
 from __future__ import annotations
 
-from ..errors import BTRuntimeError, LogicError
-from ..node import DecoratorNode, NodeConfig
+from ..errors import BTRuntimeError, LogicError, NodeExecutionError
+from ..node import DecoratorNode, NodeConfig, _is_execute_tick, _wrap_error, tick_cell
 from ..ports import BOOL, PortInfo, input_port
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType, PortDirection
 
@@ -17,14 +17,28 @@ class InverterNode(DecoratorNode):
     _bare_tick_ok = True  # tick() resets a completed child itself
 
     def tick(self) -> NodeStatus:
-        self.set_status(RUNNING)
-        status = self.child.execute_tick()
-        if status is SUCCESS:
-            self.reset_child()
-            return FAILURE
-        if status is FAILURE:
-            self.reset_child()
-            return SUCCESS
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        child = self._child_cell
+        # -- status = tick_cell(child), inlined for speed ------------------------------------
+        fast = child.fast
+        try:
+            status = fast(child.node)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
+                raise
+            raise _wrap_error(child, exc) from exc
+        if status is not SKIPPED:
+            if status is IDLE:
+                child.node.set_status(status)  # raises
+            child.status = status
+        # -------------------------------------------------------------------------------------
+        if status is SUCCESS or status is FAILURE:
+            if child.status is RUNNING:  # reset_child(), inlined
+                child.node.halt_node()
+            child.status = IDLE
+            return FAILURE if status is SUCCESS else SUCCESS
         if status is RUNNING or status is SKIPPED:
             return status
         raise _idle(self)
@@ -36,8 +50,8 @@ class ForceSuccessNode(DecoratorNode):
     _forced = SUCCESS
 
     def tick(self) -> NodeStatus:
-        self.set_status(RUNNING)
-        status = self.child.execute_tick()
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        status = tick_cell(self._child_cell)
         if status is SUCCESS or status is FAILURE:
             self.reset_child()
             return self._forced
@@ -52,8 +66,8 @@ class KeepRunningUntilFailureNode(DecoratorNode):
     _bare_tick_ok = True  # tick() resets a completed child itself
 
     def tick(self) -> NodeStatus:
-        self.set_status(RUNNING)
-        status = self.child.execute_tick()
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        status = tick_cell(self._child_cell)
         if status is FAILURE:
             self.reset_child()
             return FAILURE
@@ -62,7 +76,7 @@ class KeepRunningUntilFailureNode(DecoratorNode):
             return RUNNING
         if status is RUNNING:
             return RUNNING
-        return self._status
+        return self._cell.status
 
 
 class RepeatNode(DecoratorNode):
@@ -85,11 +99,11 @@ class RepeatNode(DecoratorNode):
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [num_cycles] in RepeatNode") from None
         loop = self._count < n or n == -1
-        self.set_status(RUNNING)
-        child = self.child
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        child = self._child_cell
         while loop:
-            prev = child._status
-            status = child.execute_tick()
+            prev = child.status
+            status = tick_cell(child)
             if status is SUCCESS:
                 self._count += 1
                 loop = self._count < n or n == -1
@@ -136,11 +150,11 @@ class RetryNode(DecoratorNode):
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [num_attempts] in RetryNode") from None
         loop = self._tries < n or n == -1
-        self.set_status(RUNNING)
-        child = self.child
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        child = self._child_cell
         while loop:
-            prev = child._status
-            status = child.execute_tick()
+            prev = child.status
+            status = tick_cell(child)
             if status is SUCCESS:
                 self._tries = 0
                 self.reset_child()
@@ -189,8 +203,8 @@ class RunOnceNode(DecoratorNode):
         skip = self.get_input("then_skip", True)
         if self._done:
             return SKIPPED if skip else self._returned
-        self.set_status(RUNNING)
-        status = self.child.execute_tick()
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        status = tick_cell(self._child_cell)
         if status is SUCCESS or status is FAILURE:
             self._done = True
             self._returned = status
@@ -238,7 +252,7 @@ class PreconditionNode(DecoratorNode):
             self._children_running = self._script.run_bool(cfg.blackboard, cfg.enums)
         if not self._children_running:
             return else_status
-        status = self.child.execute_tick()
+        status = tick_cell(self._child_cell)
         if status is SUCCESS or status is FAILURE:
             self.reset_child()
             self._children_running = False
@@ -260,9 +274,10 @@ class SubTreeNode(DecoratorNode):
                          "If true, all the ports with the same name will be remapped")]
 
     def tick(self) -> NodeStatus:
-        if self._status is IDLE:
-            self.set_status(RUNNING)
-        status = self.child.execute_tick()
+        cell = self._cell
+        if cell.status is IDLE:
+            cell.status = RUNNING  # set_status(RUNNING)
+        status = tick_cell(self._child_cell)
         if status is SUCCESS or status is FAILURE:
             self.reset_child()
         return status

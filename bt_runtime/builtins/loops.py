@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections import deque
 
 from ..errors import BTRuntimeError
-from ..node import DecoratorNode, NodeConfig
+from ..node import DecoratorNode, NodeConfig, tick_cell
 from ..ports import (
     BOOL,
     DOUBLE,
@@ -68,7 +68,7 @@ class LoopNode(DecoratorNode):
 
     def tick(self) -> NodeStatus:
         popped = False
-        if self._status is IDLE:
+        if self._cell.status is IDLE:
             self._child_running = False
             self._current = deque(self._static) if self._static is not None else None
         if not self._child_running:
@@ -79,9 +79,9 @@ class LoopNode(DecoratorNode):
                 popped = True
         if not popped and not self._child_running:
             return self.get_input("if_empty")
-        if self._status is IDLE:
+        if self._cell.status is IDLE:
             self.set_status(RUNNING)
-        status = self.child.execute_tick()
+        status = tick_cell(self._child_cell)
         self._child_running = status is RUNNING
         if status is SUCCESS or status is FAILURE:
             self.reset_child()

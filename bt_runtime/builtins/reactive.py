@@ -7,7 +7,7 @@ re-evaluated fresh next tick and a previously running sibling is stopped (spec 4
 from __future__ import annotations
 
 from ..errors import LogicError, NodeExecutionError
-from ..node import ControlNode, NodeConfig
+from ..node import ControlNode, NodeConfig, _wrap_error
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
 
@@ -22,68 +22,64 @@ class ReactiveNode(ControlNode):
         self._running_child = -1
         self._stop_on, self._otherwise = (SUCCESS, FAILURE) if fallback else (FAILURE, SUCCESS)
         self._label = "ReactiveFallback" if fallback else "ReactiveSequence"
-        super().__init__(name, config)
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            ControlNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
 
     @classmethod
     def enable_exception(cls, enable: bool) -> None:
         cls.throw_if_multiple_running = enable
 
     def tick(self) -> NodeStatus:
-        current = self._status
+        cell = self._cell
+        current = cell.status
         if current is not RUNNING:
             if current is IDLE:
                 self._running_child = -1
-            if self._subscribers:
-                self.set_status(RUNNING)
-            else:
-                self._status = RUNNING
+            cell.status = RUNNING  # notifies if observed
         stop_on = self._stop_on
         all_skipped = True
-        children = self.children
-        for index, child in enumerate(children):
-            # -- tick the child and store its status (node.tick_child, inlined for speed) --
-            prev = child._status
+        cells = self._cells
+        index = -1
+        for child in cells:
+            index += 1
+            # -- tick the child and store its status (node.tick_cell, inlined for speed) --
+            fast = child.fast
             try:
-                status = child._fast()
+                status = fast(child.node)
             except NodeExecutionError:
                 raise
             except Exception as exc:
-                raise NodeExecutionError(child.config.path, child.config.registration_id, exc) from exc
-            if status is not prev:
-                if status is not SKIPPED:
-                    if status is IDLE or child._subscribers:
-                        child.set_status(status)
-                    else:
-                        child._status = status
-            elif status is IDLE:
-                child.set_status(status)
+                raise _wrap_error(child, exc) from exc
+            # (SKIPPED is never stored; IDLE raises through set_status)
             # ---------------------------------------------------------------------------------
-            if status is not SKIPPED:
-                all_skipped = False
+            if status is stop_on:
+                child.status = status
+                self.reset_children()
+                return stop_on
             if status is RUNNING:
-                for other in children:  # halt/reset every other child (halt_child, inlined)
+                child.status = status
+                for other in cells:  # halt/reset every other child (halt_child, inlined)
                     if other is not child:
-                        other_status = other._status
+                        other_status = other.status
                         if other_status is not IDLE:
                             if other_status is RUNNING:
-                                other.halt_node()
-                            if other._subscribers:
-                                other.reset_status()
-                            else:
-                                other._status = IDLE
+                                other.node.halt_node()
+                            other.status = IDLE  # notifies if observed
                 if self._running_child == -1:
                     self._running_child = index
                 elif self.throw_if_multiple_running and self._running_child != index:
                     raise LogicError(f"[{self._label}]: only a single child can return RUNNING.\n"
                                      f"This throw can be disabled with {self._label}::EnableException(false)")
                 return RUNNING
-            if status is stop_on:
-                self.reset_children()
-                return stop_on
             if status is SKIPPED:
                 self.halt_child(index)
-            elif status is IDLE:
-                raise LogicError(f"[{self.name}]: A children should not return IDLE")
+            else:
+                if status is IDLE:
+                    child.node.set_status(status)  # raises
+                child.status = status
+                all_skipped = False
         self.reset_children()
         return SKIPPED if all_skipped else self._otherwise
 

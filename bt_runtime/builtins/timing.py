@@ -8,7 +8,7 @@ the wake-up signal, like BT.CPP's timer thread does.
 from __future__ import annotations
 
 from ..errors import BTRuntimeError
-from ..node import DecoratorNode, NodeConfig, StatefulActionNode
+from ..node import DecoratorNode, NodeConfig, StatefulActionNode, tick_cell
 from ..ports import UINT, input_port
 from ..status import FAILURE, RUNNING, SUCCESS, NodeStatus
 from ..timers import Timer
@@ -82,7 +82,7 @@ class TimeoutNode(DecoratorNode):
         if self._child_halted:
             self._started = False
             return FAILURE
-        status = self.child.execute_tick()
+        status = tick_cell(self._child_cell)
         if status is SUCCESS or status is FAILURE:
             self._started = False
             self._cancel()
@@ -90,7 +90,7 @@ class TimeoutNode(DecoratorNode):
         return status
 
     def _expired(self) -> None:
-        if self.child is not None and self.child._status is RUNNING:
+        if self._child is not None and self._child_cell.status is RUNNING:
             self._child_halted = True
             self.reset_child()
             self.config.wake_up.emit()
@@ -132,7 +132,7 @@ class DelayNode(DecoratorNode):
             self.set_status(RUNNING)
             self._timer = self.config.timers.add(msec / 1000.0, self._expired)
         if self._complete:
-            status = self.child.execute_tick()
+            status = tick_cell(self._child_cell)
             if status is SUCCESS or status is FAILURE:
                 self._started = False
                 self.reset_child()

@@ -4,7 +4,7 @@ SkipUnlessUpdated, WaitValueUpdate (decorators) and WasEntryUpdated (action)."""
 from __future__ import annotations
 
 from ..errors import LogicError
-from ..node import DecoratorNode, NodeConfig, SyncActionNode
+from ..node import DecoratorNode, NodeConfig, SyncActionNode, tick_cell
 from ..ports import ANY, blackboard_key, input_port
 from ..status import FAILURE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
@@ -34,7 +34,7 @@ class EntryUpdatedDecorator(DecoratorNode):
 
     def tick(self) -> NodeStatus:
         if self._still_running:
-            status = self.child.execute_tick()
+            status = tick_cell(self._child_cell)
             self._still_running = status is RUNNING
             return status
         entry = self.config.blackboard.get_entry(self._key)
@@ -43,7 +43,7 @@ class EntryUpdatedDecorator(DecoratorNode):
         previous, self._sequence_id = self._sequence_id, entry.sequence_id
         if previous == entry.sequence_id:
             return self.if_not_updated
-        status = self.child.execute_tick()
+        status = tick_cell(self._child_cell)
         self._still_running = status is RUNNING
         return status
 

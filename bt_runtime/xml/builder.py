@@ -32,8 +32,8 @@ from ..ports import (
 from ..status import PortDirection
 from ..timers import TimerQueue, WakeUpSignal
 from ..tree import SubtreeRecord, Tree
-from .document import EXPLICIT_TAGS, TreeDefinition, suggest
-from .reader import XMLDocument, element_children
+from .document import EXPLICIT_TAG_SET, TreeDefinition, suggest
+from .reader import ELEMENT, XMLDocument
 
 if TYPE_CHECKING:
     from ..factory import BehaviorTreeFactory
@@ -41,6 +41,7 @@ if TYPE_CHECKING:
 PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")
 POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
 _CONDITION_NAMES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
+_node_config = NodeConfig._for_node
 _BAD_INSTANCE_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 _INT_RE = re.compile(r"-?[0-9]+")
 _DOUBLE_RE = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
@@ -92,15 +93,13 @@ class TreeBuilder:
 
     def _config(self, manifest: TreeNodeManifest, bb: Blackboard, uid: int, path: str,
                 doc: XMLDocument, elem: etree._Element) -> NodeConfig:
-        cfg = NodeConfig(bb, enums=self.factory.enums, manifest=manifest, uid=uid, path=path,
-                         context=self.factory.context, wake_up=self.wake_up, timers=self.timers,
-                         clock=self.clock_holder[0])
-        cfg.source = (doc.file, doc.line_of(elem))
-        return cfg
+        factory = self.factory
+        return _node_config(bb, factory.enums, manifest, uid, path, factory.context, self.wake_up,
+                            self.timers, self.clock_holder[0], doc.file, doc.line_of(elem))
 
     def _compile_conditions(self, cfg: NodeConfig, attrs: dict[str, str], doc: XMLDocument,
                             elem: etree._Element) -> None:
-        if not any(key in _CONDITION_NAMES for key in attrs):
+        if _CONDITION_NAMES.isdisjoint(attrs):
             return
         for names, target in ((PRE_CONDITIONS, cfg.pre_conditions), (POST_CONDITIONS, cfg.post_conditions)):
             for attr in names:
@@ -125,24 +124,45 @@ class TreeBuilder:
         tag = elem.tag
         if tag == "SubTree":
             return self._build_subtree(elem, doc, record, prefix, stack)
-        type_id = elem.get("ID") if tag in EXPLICIT_TAGS else tag
-        manifests = self.factory.manifests
+        type_id = elem.get("ID") if tag in EXPLICIT_TAG_SET else tag
+        factory = self.factory
+        manifests = factory.manifests
         manifest = manifests.get(type_id)
         if manifest is None:
             raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
-        attrs = dict(elem.attrib)
-        name = attrs.get("name", type_id)
-        bad = self._check_instance_name(name)
-        if bad is not None:
+        items = elem.items()  # one lxml call (each costs about a microsecond)
+        if not items:  # the common cases (no attribute, or just a name) without building a dict
+            attrs = None
+            name = type_id
+        elif len(items) == 1 and items[0][0] == "name":
+            attrs = None
+            name = items[0][1]
+        else:
+            attrs = dict(items)
+            name = attrs.get("name", type_id)
+        # (every forbidden character is unprintable; isprintable() costs far less than the search)
+        if not name.isprintable() and _BAD_INSTANCE_CHAR.search(name) is not None:
+            bad = self._check_instance_name(name)
             raise self._err(doc, elem, f"The instance name '{name!r}' contains the forbidden character {bad!r}")
-        uid = self._next_uid()
+        self._uid = uid = self._uid + 1  # _next_uid(), inlined
+        if uid > 0xFFFF:
+            raise XMLLoadError("Too many nodes: uids are 16-bit in BT.CPP (max 65535)")
         path = prefix + name + (f"::{uid}" if name == type_id else "")
-        builder, manifest = self._substitute(type_id, name, path, manifest)
-        cfg = self._config(manifest, record.blackboard, uid, path, doc, elem)
-        given = self._assign_ports(cfg, manifest, attrs, doc, elem)
-        self._fill_defaults(cfg, manifest, given)
-        self._check_literals_and_create_entries(cfg, manifest, given, record.blackboard, doc, elem)
-        self._compile_conditions(cfg, attrs, doc, elem)
+        if factory.substitution_rules:
+            builder, manifest = self._substitute(type_id, name, path, manifest)
+        else:
+            builder = factory.builders[type_id]
+        # self._config(...), inlined: this runs once per node
+        cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
+                           self.wake_up, self.timers, self.clock_holder[0], doc.file, doc.line_of(elem))
+        # Port passes only when there is something to do (most nodes have no port attributes).
+        given = () if attrs is None else self._assign_ports(cfg, manifest, attrs, doc, elem)
+        if manifest.ports:
+            self._fill_defaults(cfg, manifest, given)
+            if given:
+                self._check_literals_and_create_entries(cfg, manifest, given, record.blackboard, doc, elem)
+        if attrs is not None:
+            self._compile_conditions(cfg, attrs, doc, elem)
         try:
             node = builder(name, cfg)
         except XMLLoadError:
@@ -153,9 +173,11 @@ class TreeBuilder:
             raise self._err(doc, elem, f"creating node '{path}' [{type_id}] failed: "
                                        f"{type(exc).__name__}: {exc}") from exc
         record.nodes.append(node)
-        for child_elem in element_children(elem):
-            child = self._build_node(child_elem, doc, record, prefix, stack)
-            node.add_child(child)
+        children = elem[:]  # element_children(elem), inlined: most nodes are leaves
+        if children:
+            for child_elem in children:
+                if type(child_elem) is ELEMENT or isinstance(child_elem.tag, str):
+                    node.add_child(self._build_node(child_elem, doc, record, prefix, stack))
         return node
 
     def _substitute(self, type_id: str, name: str, path: str,

@@ -18,13 +18,14 @@ from lxml import etree
 from ..errors import XMLLoadError
 from ..ports import PortInfo, find_forbidden_char, input_port, port_type
 from ..status import NodeType, PortDirection
-from .reader import XMLDocument, element_children, parse_xml_text, read_xml_file
+from .reader import ELEMENT, XMLDocument, element_children, parse_xml_text, read_xml_file
 from .v3 import BTFormatWarning, is_v3, translate_v3
 
 if TYPE_CHECKING:
     from ..factory import BehaviorTreeFactory
 
 EXPLICIT_TAGS = ("Action", "Condition", "Control", "Decorator")
+EXPLICIT_TAG_SET = frozenset(EXPLICIT_TAGS)  # for membership tests (a hash instead of 4 compares)
 MAX_DEPTH = 256
 _PORT_TAGS = {"input_port": PortDirection.INPUT, "output_port": PortDirection.OUTPUT,
               "inout_port": PortDirection.INOUT}
@@ -225,7 +226,9 @@ class TreeRegistry:
                                        "The XML is too deeply nested.")
         manifests = self.factory.manifests
         tag = elem.tag
-        children = element_children(elem)
+        children = elem[:]  # element_children(elem), inlined: most nodes are leaves
+        if children:
+            children = [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
         if tag == "SubTree":
             if children:
                 raise self._err(doc, elem, f"<SubTree> with ID '{elem.get('ID')}' should not have any child")
@@ -236,15 +239,16 @@ class TreeRegistry:
                 raise self._err(doc, elem, "The attribute [ID] of tag <SubTree> must not use the name of "
                                            "a registered Node")
             return
-        if tag in EXPLICIT_TAGS:
+        explicit = tag in EXPLICIT_TAG_SET
+        if explicit:
             type_id = elem.get("ID")
             if type_id is None:
                 raise self._err(doc, elem, f"The tag <{tag}> must have the attribute [ID]")
         else:
             type_id = tag
-            if "ID" in elem.attrib:
+            if elem.get("ID") is not None:
                 raise self._err(doc, elem, f"Attribute [ID] is not allowed in <{tag}>")
-        if parent is not None and parent.tag == "ReactiveSequence" and tag in EXPLICIT_TAGS:
+        if explicit and parent is not None and parent.tag == "ReactiveSequence":
             raise self._err(doc, elem, f"Unknown node type: {tag} (BehaviorTree.CPP rejects explicit "
                                        "<Action ID=...> children of a ReactiveSequence; use the compact "
                                        f"form <{type_id}/>)")
@@ -252,17 +256,21 @@ class TreeRegistry:
         if manifest is None:
             raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
         node_type = manifest.node_type
-        if node_type is NodeType.DECORATOR and len(children) != 1:
+        if node_type is _DECORATOR and len(children) != 1:
             raise self._err(doc, elem, f"The node '{type_id}' must have exactly 1 child")
-        if node_type is NodeType.CONTROL:
+        if node_type is _CONTROL:
             if not children:
                 raise self._err(doc, elem, f"The node '{type_id}' must have 1 or more children")
             if type_id == "TryCatch" and len(children) < 2:
                 raise self._err(doc, elem, "The node 'TryCatch' must have at least 2 children")
-        if node_type in (NodeType.ACTION, NodeType.CONDITION) and children:
+        if children and node_type in _LEAF_TYPES:
             raise self._err(doc, elem, f"The node '{type_id}' must not have any child")
         for child in children:
             self._check_node(doc, child, depth + 1, elem)
+
+
+_DECORATOR, _CONTROL = NodeType.DECORATOR, NodeType.CONTROL
+_LEAF_TYPES = (NodeType.ACTION, NodeType.CONDITION)
 
 
 def _looks_v3(root: etree._Element) -> bool:

@@ -27,6 +27,8 @@ _START_TAG = re.compile(r"""<[A-Za-z_:][-\w:.]*(?:\s+[^\s=/>]+\s*=\s*(?:"[^"]*"|
 _ATTR_VALUE = re.compile(r"""=(\s*)("[^"]*"|'[^']*')""")
 _VALID_ENTITY = re.compile(r"&(?:amp|lt|gt|quot|apos|#[0-9]+|#x[0-9a-fA-F]+);")
 _NEEDS_FIX = re.compile(r"""=\s*(?:"[^"]*[<&\n\t\r][^"]*"|'[^']*[<&\n\t\r][^']*')""")
+# Finds at least every match of _NEEDS_FIX, without backtracking (a pre-check on the whole text)
+_MAY_NEED_FIX = re.compile(r"""=\s*+(?:"[^"<&\n\t\r]*+|'[^'<&\n\t\r]*+)[<&\n\t\r]""")
 _DECLARATION = re.compile(r"^\ufeff?\s*<\?xml[^>]*\?>")
 _DTD = re.compile(r"<!(DOCTYPE|ENTITY)", re.IGNORECASE)
 
@@ -156,7 +158,7 @@ def parse_xml_text(text: str | bytes, file: str | None = None) -> XMLDocument:
     if len(text) > MAX_XML_BYTES:
         raise XMLLoadError(f"XML too large ({len(text)} characters, limit {MAX_XML_BYTES}); refused",
                            file=file)
-    dtd = _DTD.search(text)
+    dtd = _DTD.search(text) if "<!" in text else None
     if dtd:
         line = text.count("\n", 0, dtd.start()) + 1
         raise XMLLoadError("DOCTYPE and ENTITY declarations are not allowed in tree files", file=file,
@@ -164,9 +166,12 @@ def parse_xml_text(text: str | bytes, file: str | None = None) -> XMLDocument:
     decl = _DECLARATION.match(text)
     if decl:
         text = "\n" * decl.group(0).count("\n") + text[decl.end():]
-    if not text.strip():
+    if not text or text.isspace():  # (not text.strip(): no copy of the text)
         raise XMLLoadError("Error parsing the XML: empty document", file=file, line=1)
-    fixed, starts, removed = _make_lenient(text)
+    if _MAY_NEED_FIX.search(text) is None:  # no attribute value anywhere needs escaping
+        fixed, starts, removed = text, [], []
+    else:
+        fixed, starts, removed = _make_lenient(text)
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, dtd_validation=False,
                              huge_tree=False, remove_comments=True, remove_pis=True)
     try:
@@ -180,4 +185,10 @@ def parse_xml_text(text: str | bytes, file: str | None = None) -> XMLDocument:
 
 def element_children(element: etree._Element) -> list[etree._Element]:
     """Child elements, ignoring comments and processing instructions."""
-    return [c for c in element if isinstance(c.tag, str)]
+    children = element[:]  # one call: iterating the element costs a microsecond per child
+    if not children:
+        return children
+    return [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
+
+
+ELEMENT = etree._Element  # what a plain parsed element is (comments and PIs are subclasses)
