@@ -80,7 +80,8 @@ class NodeConfig:
     @classmethod
     def _for_node(cls, blackboard: Blackboard, enums: dict[str, int], manifest: TreeNodeManifest,
                   uid: int, path: str, context: Any, wake_up: WakeUpSignal, timers: TimerQueue,
-                  clock: Callable[[], float], file: str | None, line: int | None) -> NodeConfig:
+                  clock: Callable[[], float], file: str | None,
+                  line: int | Callable[[], int | None] | None) -> NodeConfig:
         """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
         positional arguments (much cheaper than the keyword call, once per node).
 
@@ -110,8 +111,12 @@ class NodeConfig:
 
     @property
     def source(self) -> tuple[str | None, int | None]:
-        """(file, line) of the node's element, for messages."""
-        return (self._file, self._line)
+        """(file, line) of the node's element, for messages. The builder may give the line as
+        a function: finding it costs a text search, done only if someone asks."""
+        line = self._line
+        if callable(line):
+            line = self._line = line()
+        return (self._file, line)
 
     @source.setter
     def source(self, value: tuple[str | None, int | None]) -> None:

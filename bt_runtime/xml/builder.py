@@ -12,6 +12,7 @@ from __future__ import annotations
 import fnmatch
 import re
 import time
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from lxml import etree
@@ -95,7 +96,7 @@ class TreeBuilder:
                 doc: XMLDocument, elem: etree._Element) -> NodeConfig:
         factory = self.factory
         return _node_config(bb, factory.enums, manifest, uid, path, factory.context, self.wake_up,
-                            self.timers, self.clock_holder[0], doc.file, doc.line_of(elem))
+                            self.timers, self.clock_holder[0], doc.file, partial(doc.line_of, elem))
 
     def _compile_conditions(self, cfg: NodeConfig, attrs: dict[str, str], doc: XMLDocument,
                             elem: etree._Element) -> None:
@@ -154,7 +155,8 @@ class TreeBuilder:
             builder = factory.builders[type_id]
         # self._config(...), inlined: this runs once per node
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
-                           self.wake_up, self.timers, self.clock_holder[0], doc.file, doc.line_of(elem))
+                           self.wake_up, self.timers, self.clock_holder[0], doc.file,
+                           partial(doc.line_of, elem))
         # Port passes only when there is something to do (most nodes have no port attributes).
         given = () if attrs is None else self._assign_ports(cfg, manifest, attrs, doc, elem)
         if manifest.ports:
