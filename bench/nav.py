@@ -215,6 +215,9 @@ def bench_end_to_end(world: OccupancyGrid, start: Pose2D, goal: Pose2D) -> None:
 
 
 def main() -> None:
+    from bt_runtime.logging_setup import quiet_logging
+
+    quiet_logging("error")
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()

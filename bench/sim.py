@@ -178,6 +178,9 @@ def physics_microbench(robot: str = "burger", steps: int = 20000) -> float:
 
 
 def main(argv: list[str] | None = None) -> None:
+    from bt_runtime.logging_setup import quiet_logging
+
+    quiet_logging("error")
     ap = argparse.ArgumentParser(description="simulator real-time factor")
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--robot", default="burger")
