@@ -30,6 +30,15 @@ from .types import ERROR_CODE, GOALS, INT_LIST, PATH, POSE, SERVER_TIMEOUT, TRAC
 _STATUS = {True: SUCCESS, False: FAILURE}
 
 
+def _remember_goals(node: Any) -> bool:
+    """Read ``goal``/``goals`` (port or blackboard), store them on the node, say if they changed."""
+    goals = input_or_blackboard(node, "goals")
+    goal = input_or_blackboard(node, "goal")
+    changed = goal != node.goal or goals != node.goals
+    node.goal, node.goals = goal, goals
+    return changed
+
+
 class GoalUpdated(ConditionNode):
     """SUCCESS when the goal (or goals) changed since the last tick of this activation.
 
@@ -50,16 +59,8 @@ class GoalUpdated(ConditionNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        if self._status is IDLE:
-            self.goals = input_or_blackboard(self, "goals")
-            self.goal = input_or_blackboard(self, "goal")
-            return FAILURE
-        goals = input_or_blackboard(self, "goals")
-        goal = input_or_blackboard(self, "goal")
-        if goal != self.goal or goals != self.goals:
-            self.goal, self.goals = goal, goals
-            return SUCCESS
-        return FAILURE
+        changed = _remember_goals(self)
+        return SUCCESS if changed and self._status is not IDLE else FAILURE
 
 
 class GlobalUpdatedGoal(ConditionNode):
@@ -78,17 +79,11 @@ class GlobalUpdatedGoal(ConditionNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
+        changed = _remember_goals(self)
         if self.first_time:
             self.first_time = False
-            self.goals = input_or_blackboard(self, "goals")
-            self.goal = input_or_blackboard(self, "goal")
             return SUCCESS
-        goals = input_or_blackboard(self, "goals")
-        goal = input_or_blackboard(self, "goal")
-        if goal != self.goal or goals != self.goals:
-            self.goal, self.goals = goal, goals
-            return SUCCESS
-        return FAILURE
+        return SUCCESS if changed else FAILURE
 
 
 class IsGoalNearby(ConditionNode):
