@@ -50,6 +50,7 @@ class Tree:
         self.source_xml = source_xml
         self._clock_holder = clock_holder if clock_holder is not None else [time.monotonic]
         self._observers: list[tuple[StatusCallback, list[Callable[[], None]]]] = []
+        self.retick_cutoffs = 0  # tick_once calls that stopped at max_reticks
 
     # -- structure -----------------------------------------------------------------------------
     @property
@@ -114,9 +115,14 @@ class Tree:
         return remove
 
     # -- ticking -------------------------------------------------------------------------------
-    def tick_once(self) -> NodeStatus:
-        """Tick the root; re-tick at once while RUNNING and a wake-up was emitted."""
-        return self._tick_root(_ONCE, 0.0)
+    def tick_once(self, max_reticks: int | None = None) -> NodeStatus:
+        """Tick the root; re-tick at once while RUNNING and a wake-up was emitted.
+
+        As in BT.CPP the re-ticks are unbounded by default (so ``Repeat num_cycles="-1"`` of a
+        synchronous child never returns). A host loop passes ``max_reticks`` to bound them: the
+        root then returns RUNNING and the wake-up stays set for the next tick.
+        """
+        return self._tick_root(_ONCE, 0.0, max_reticks)
 
     def tick_exactly_once(self) -> NodeStatus:
         """Tick the root exactly once, ignoring wake-up signals."""
@@ -127,7 +133,7 @@ class Tree:
         (interrupted early by a wake-up signal or a due timer)."""
         return self._tick_root(_WHILE_RUNNING, sleep)
 
-    def _tick_root(self, mode: int, sleep: float) -> NodeStatus:
+    def _tick_root(self, mode: int, sleep: float, max_reticks: int | None = None) -> NodeStatus:
         cell = self.root_node._cell  # root.execute_tick() is tick_cell(cell) (node.py)
         timers = self.timers
         wake_up = self.wake_up
@@ -137,7 +143,13 @@ class Tree:
                 timers.fire_due()
             status = tick_cell(cell)
             if mode != _EXACTLY_ONCE:
-                while status is RUNNING and wake_up.check_and_clear():
+                reticks = 0
+                while status is RUNNING and wake_up.is_set:
+                    if max_reticks is not None and reticks >= max_reticks:
+                        self.retick_cutoffs += 1  # left set: the host's next tick goes on
+                        break
+                    wake_up.check_and_clear()
+                    reticks += 1
                     status = tick_cell(cell)
             if status is SUCCESS or status is FAILURE:
                 cell.status = IDLE  # root.reset_status()

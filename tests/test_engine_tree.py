@@ -233,3 +233,16 @@ def test_empty_tree_error():
 
     with pytest.raises(LogicError, match="Empty Tree"):
         Tree([], {}, None, None).tick_once()
+
+
+def test_tick_once_reticks_on_wake_up_until_bounded(factory):
+    calls = []
+    factory.register_simple_action("Count", lambda n: (calls.append(1), NodeStatus.SUCCESS)[1])
+    tree = factory.create_tree_from_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="T"><Repeat num_cycles="10"><Count/></Repeat>'
+        '</BehaviorTree></root>')
+    assert tree.tick_once() is NodeStatus.SUCCESS and len(calls) == 10  # unbounded, as BT.CPP
+    calls.clear()
+    assert tree.tick_once(max_reticks=3) is NodeStatus.RUNNING and len(calls) == 4
+    assert tree.wake_up.is_set and tree.retick_cutoffs == 1  # the next tick goes on at once
+    assert tree.tick_once() is NodeStatus.SUCCESS and len(calls) == 10

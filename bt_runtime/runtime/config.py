@@ -16,6 +16,9 @@ class TickConfig(_Model):
                                                            "(stock asyncio wakes up to ~3 ms late)")
     phase: float = Field(0.5, ge=0, lt=1, description="tick deadlines sit this fraction of a period after "
                                                        "the driver's start, away from its periodic work")
+    max_reticks: int = Field(100, ge=0, description="wake-up re-ticks within one tick (BT.CPP: unbounded); "
+                                                    "bounds a Repeat -1 of a synchronous child so the "
+                                                    "loop keeps running")
 
 
 class ComponentWatch(_Model):

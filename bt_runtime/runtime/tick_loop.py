@@ -146,7 +146,7 @@ class TickLoop:
             self.supervisor.heartbeat("tree")
         t0 = time.perf_counter()
         try:
-            status = self.tree.tick_once()
+            status = self.tree.tick_once(self.config.max_reticks)
         except Exception as exc:  # the loop never dies: log, halt, stop the robot, go on
             self.stats.add(lateness, time.perf_counter() - t0)
             self._on_error(exc)

@@ -98,3 +98,23 @@ async def test_tree_restarted_by_supervisor_after_the_tick_task_dies(make_runtim
     assert states[-3:] == ["failed", "restarting", "ok"]
     assert not rt.tick_task.done()
     await rt.stop()
+
+
+async def test_endless_wake_up_reticks_do_not_freeze_the_loop(make_runtime):
+    """Repeat -1 of a synchronous child asks for a re-tick forever (BT.CPP's tickOnce never
+    returns); the host bounds the re-ticks per tick so the loop, watchdog and gate go on."""
+    counts = []
+
+    def register(factory):
+        factory.register_simple_action("Count", lambda n: (counts.append(1), NodeStatus.SUCCESS)[1])
+
+    rt = make_runtime(tree_xml('<Repeat num_cycles="-1"><Count/></Repeat>'), register=[register])
+    rt.tick_loop.config.max_reticks = 5
+    await rt.start()
+    await asyncio.sleep(0.5)
+    ticks = rt.tick_loop.stats.count
+    assert 45 <= ticks <= 51
+    assert len(counts) == ticks * 6  # the tick and 5 re-ticks, one Count each
+    assert rt.tree.retick_cutoffs == ticks and rt.tick_loop.status is NodeStatus.RUNNING
+    assert not rt.tick_task.done()
+    await rt.stop()
