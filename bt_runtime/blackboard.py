@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .errors import BTRuntimeError, LogicError
-from .ports import ANYTYPE, EMPTY, PortType, casting_safe, type_of_value, value_to_string
+from .ports import ANY, ANYTYPE, EMPTY, PortType, casting_safe, type_of_value, value_to_string
 
 
 class Entry:
@@ -189,6 +189,25 @@ class Blackboard:
         else:
             raise self._set_mismatch(key, declared, value_type)
         entry.write(_copy_into(new, entry))
+
+    def set_any(self, key: str, value: Any, value_type: PortType) -> None:
+        """BT.CPP ``Blackboard::set<BT::Any>`` (what SetBlackboard calls): a new entry takes the
+        value's own type, even std::string, so repeated string writes stay legal; an untyped
+        entry becomes ``BT::Any``; a typed entry accepts only a value of its type, stored as is
+        (no string or number conversion)."""
+        if key[:1] == "@":
+            self.root().set_any(key[1:], value, value_type)
+            return
+        entry = self._storage.get(key)
+        if entry is None:
+            self.create_entry(key, value_type).write(value)
+            return
+        declared = entry.type
+        if not declared.strongly_typed:
+            entry.type = ANY
+        elif declared != value_type:
+            raise self._set_mismatch(key, declared, ANY)
+        entry.write(value)
 
     def _set_mismatch(self, key: str, previous: PortType, current: PortType) -> LogicError:
         return LogicError(f"Blackboard::set({key}): once declared, the type of a port shall not change. "

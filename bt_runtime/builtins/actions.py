@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..errors import BTRuntimeError, LogicError
 from ..node import ConditionNode, NodeConfig, SyncActionNode
-from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port
+from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port, type_of_value
 from ..status import FAILURE, SUCCESS, NodeStatus
 
 
@@ -114,14 +114,15 @@ class SetBlackboardNode(SyncActionNode):
                 bb.create_entry(output_key, src.type)
                 dst = bb.get_entry(output_key)
             out = src.value
+            out_type = src.type if src.type.strongly_typed else None
         else:
-            out = value_str
+            out, out_type = value_str, STRING
         if out is EMPTY:
             return FAILURE
         if dst is not None and dst.type.name != STRING.name and isinstance(out, str):
             if dst.type.kind == "anytype":
-                # BT.CPP quirk: converting for an untyped destination yields an empty BT::Any,
-                # so the entry becomes "not initialized" and typed BT::Any from then on.
+                # BT.CPP quirk: an untyped entry has no converter, the conversion yields an empty
+                # BT::Any, so the entry becomes "not initialized" and typed BT::Any from then on.
                 dst.write(EMPTY)
                 dst.type = ANY
                 return SUCCESS
@@ -136,7 +137,8 @@ class SetBlackboardNode(SyncActionNode):
                 out = dst.type.from_string(out, cfg.enums)
             except Exception as exc:
                 raise LogicError(f"Can't convert string [{out}] to type [{dst.type.name}]: {exc}") from None
-        bb.set(output_key, out)
+            out_type = dst.type
+        bb.set_any(output_key, out, out_type or type_of_value(out))
         return SUCCESS
 
 

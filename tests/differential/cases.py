@@ -455,6 +455,16 @@ case("set_blackboard_into_typed_entry",
 case("set_blackboard_untyped_destination_quirk",
      tree('<Sequence><Script code="x := 1"/><SetBlackboard output_key="x" value="5"/></Sequence>'),
      keys={"x": "int"}, ticks=1)
+case("set_blackboard_repeated_string_writes",  # set<BT::Any>: the entry is std::string, not untyped
+     tree('<Repeat num_cycles="3"><Sequence><SetBlackboard output_key="x" value="1"/>'
+          '<SetBlackboard output_key="x" value="abc"/><A name="a"/></Sequence></Repeat>'),
+     keys={"x": "string"}, ticks=1)
+case("set_blackboard_copy_of_untyped_becomes_any",
+     tree('<Sequence><Script code="y := 7"/><SetBlackboard output_key="x" value="{y}"/>'
+          '<SetBlackboard output_key="x" value="2"/></Sequence>'), ticks=1, error="tick")
+case("set_blackboard_twice_into_untyped_destination",
+     tree('<Sequence><Script code="x := 1"/><SetBlackboard output_key="x" value="2"/>'
+          '<SetBlackboard output_key="x" value="3"/></Sequence>'), ticks=1, error="tick")
 case("set_blackboard_empty_source_fails",
      tree('<SetBlackboard output_key="a" value="{nope}"/>'), ticks=1)
 case("unset_blackboard",
