@@ -541,6 +541,15 @@ class FollowPath(BtActionNode):
 _B = NavErrorCode
 
 
+def _motion_limits(node: BtActionNode) -> dict[str, Any]:
+    """The keyword arguments every motion behaviour (spin, back up, drive on heading) sends:
+    ``time_allowance``, and ``disable_collision_checks`` only when it is set."""
+    limits: dict[str, Any] = {"time_allowance": float(node.get_input("time_allowance", 10.0))}
+    if node.get_input("disable_collision_checks", False):
+        limits["disable_collision_checks"] = True
+    return limits
+
+
 class Spin(BtActionNode):
     """Rotates in place by ``spin_dist`` rad (behavior server ``spin``); counts as a recovery
     when ``is_recovery``. Errors 700-703 (COLLISION_AHEAD 703, TIMEOUT 701)."""
@@ -558,16 +567,12 @@ class Spin(BtActionNode):
                 *server_ports("spin")]
 
     def on_tick(self) -> None:
-        self.goal = {"spin_dist": float(self.get_input("spin_dist", 1.57)),
-                     "time_allowance": float(self.get_input("time_allowance", 10.0)),
-                     "disable": bool(self.get_input("disable_collision_checks", False))}
+        self.goal = {"spin_dist": float(self.get_input("spin_dist", 1.57)), "limits": _motion_limits(self)}
         if self.get_input("is_recovery", True):
             increment_recovery_count(self)
 
     def send_goal(self) -> Any:
-        g = self.goal
-        kw = {"disable_collision_checks": True} if g["disable"] else {}
-        return navigation(self).spin(g["spin_dist"], time_allowance=g["time_allowance"], **kw)
+        return navigation(self).spin(self.goal["spin_dist"], **self.goal["limits"])
 
 
 class BackUp(BtActionNode):
@@ -590,15 +595,12 @@ class BackUp(BtActionNode):
 
     def on_tick(self) -> None:
         self.goal = {"dist": float(self.get_input("backup_dist", 0.15)),
-                     "speed": float(self.get_input("backup_speed", 0.025)),
-                     "time_allowance": float(self.get_input("time_allowance", 10.0)),
-                     "disable": bool(self.get_input("disable_collision_checks", False))}
+                     "speed": float(self.get_input("backup_speed", 0.025)), "limits": _motion_limits(self)}
         increment_recovery_count(self)
 
     def send_goal(self) -> Any:
         g = self.goal
-        kw = {"disable_collision_checks": True} if g["disable"] else {}
-        return navigation(self).back_up(g["dist"], g["speed"], time_allowance=g["time_allowance"], **kw)
+        return navigation(self).back_up(g["dist"], g["speed"], **g["limits"])
 
 
 class DriveOnHeading(BtActionNode):
@@ -621,15 +623,11 @@ class DriveOnHeading(BtActionNode):
 
     def on_tick(self) -> None:
         self.goal = {"dist": float(self.get_input("dist_to_travel", 0.15)),
-                     "speed": float(self.get_input("speed", 0.025)),
-                     "time_allowance": float(self.get_input("time_allowance", 10.0)),
-                     "disable": bool(self.get_input("disable_collision_checks", False))}
+                     "speed": float(self.get_input("speed", 0.025)), "limits": _motion_limits(self)}
 
     def send_goal(self) -> Any:
         g = self.goal
-        kw = {"disable_collision_checks": True} if g["disable"] else {}
-        return navigation(self).drive_on_heading(g["dist"], g["speed"], time_allowance=g["time_allowance"],
-                                                 **kw)
+        return navigation(self).drive_on_heading(g["dist"], g["speed"], **g["limits"])
 
 
 class Wait(BtActionNode):
