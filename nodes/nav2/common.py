@@ -79,6 +79,16 @@ def input_or_blackboard(node: Any, name: str, default: Any = None) -> Any:
     return node.config.blackboard.get(name, default=default)
 
 
+def remember_goals(node: Any) -> bool:
+    """Read ``goal``/``goals`` (port or blackboard), store them on the node as ``node.goal`` and
+    ``node.goals``, and say whether they changed (Nav2's goal-updated checks)."""
+    goals = input_or_blackboard(node, "goals")
+    goal = input_or_blackboard(node, "goal")
+    changed = goal != node.goal or goals != node.goals
+    node.goal, node.goals = goal, goals
+    return changed
+
+
 def optional_input(node: Any, name: str, default: Any = None) -> Any:
     """An input that may be absent (BT.CPP ``getInput`` returning an error): ``default``."""
     return node.get_input(name, default)

@@ -21,6 +21,7 @@ from .common import (
     navigation,
     path_length,
     points_of,
+    remember_goals,
     robot_pose,
     same_path,
     server_timeout,
@@ -28,15 +29,6 @@ from .common import (
 from .types import ERROR_CODE, GOALS, INT_LIST, PATH, POSE, SERVER_TIMEOUT, TRACKING_FEEDBACK
 
 _STATUS = {True: SUCCESS, False: FAILURE}
-
-
-def _remember_goals(node: Any) -> bool:
-    """Read ``goal``/``goals`` (port or blackboard), store them on the node, say if they changed."""
-    goals = input_or_blackboard(node, "goals")
-    goal = input_or_blackboard(node, "goal")
-    changed = goal != node.goal or goals != node.goals
-    node.goal, node.goals = goal, goals
-    return changed
 
 
 class GoalUpdated(ConditionNode):
@@ -59,7 +51,7 @@ class GoalUpdated(ConditionNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        changed = _remember_goals(self)
+        changed = remember_goals(self)
         return SUCCESS if changed and self._status is not IDLE else FAILURE
 
 
@@ -79,7 +71,7 @@ class GlobalUpdatedGoal(ConditionNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        changed = _remember_goals(self)
+        changed = remember_goals(self)
         if self.first_time:
             self.first_time = False
             return SUCCESS

@@ -15,7 +15,7 @@ from bt_runtime.node import DecoratorNode, NodeConfig
 from bt_runtime.ports import DOUBLE, STRING, input_port, output_port
 from bt_runtime.status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
-from .common import input_or_blackboard, nav2_topics, path_length, points_of, robot_pose
+from .common import input_or_blackboard, nav2_topics, path_length, points_of, remember_goals, robot_pose
 from .types import GOALS, PATH, POSE
 
 
@@ -202,14 +202,10 @@ class GoalUpdatedController(DecoratorNode):
 
     def tick(self) -> NodeStatus:
         if self._status is IDLE:
-            self.goals = input_or_blackboard(self, "goals")
-            self.goal = input_or_blackboard(self, "goal")
+            remember_goals(self)
             self.goal_was_updated = True
         self.set_status(RUNNING)
-        goals = input_or_blackboard(self, "goals")
-        goal = input_or_blackboard(self, "goal")
-        if goal != self.goal or goals != self.goals:
-            self.goal, self.goals = goal, goals
+        if remember_goals(self):
             self.goal_was_updated = True
         if self.child._status is RUNNING or self.goal_was_updated:
             self.goal_was_updated = False
