@@ -1,5 +1,5 @@
 """Helpers for testing Groot2 interoperability: a blocking protocol client, port picking, the
-shared checkers' location. Used by ``tests/test_groot*.py`` and ``bench/groot.py``."""
+shared checkers' location. Used by ``tests/groot/`` and ``bench/groot.py``."""
 
 from __future__ import annotations
 

@@ -8,8 +8,7 @@ import math
 from bt_runtime.runtime.messages import Imu, Pose2D
 from nodes.collision import ImpactDetector
 from nodes.path import ring_candidates
-
-from .conftest import tree_xml
+from tests.helpers import tree_xml
 
 RECOVER = ('<KeepRunningUntilFailure><ForceSuccess><Fallback><Inverter><CollisionDetected source="{src}"/>'
            '</Inverter><Sequence><StopRobot/><EstimateContactPoint offset="0.2"/>'

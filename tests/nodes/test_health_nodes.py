@@ -5,8 +5,7 @@ from __future__ import annotations
 import asyncio
 
 from bt_runtime.runtime.supervisor import Health
-
-from .conftest import tree_xml
+from tests.helpers import tree_xml
 
 KEEP = '<KeepRunningUntilFailure><ForceSuccess>{}</ForceSuccess></KeepRunningUntilFailure>'
 

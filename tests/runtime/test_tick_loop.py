@@ -6,8 +6,7 @@ import asyncio
 
 from bt_runtime import NodeStatus, SyncActionNode
 from bt_runtime.runtime.context import RuntimeContext
-
-from .conftest import tree_xml
+from tests.helpers import tree_xml
 
 
 async def test_ticks_on_absolute_deadlines(make_runtime):

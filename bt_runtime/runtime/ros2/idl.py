@@ -4,7 +4,7 @@ Every class carries the DDS type name rmw_cyclonedds gives it (``<pkg>::msg::dds
 ``<pkg>::srv::dds_::<Srv>_Request_``, ``<pkg>::action::dds_::<Action>_SendGoal_Request_``...),
 and its fields follow the ``.msg`` definition in order and width, so Cyclone's XCDR1
 serializer produces the same bytes as ROS 2 (checked against ``rosbags`` in
-``tests/test_ros2_cdr.py``). Messages without fields get rosidl's
+``tests/runtime/ros2/test_cdr.py``). Messages without fields get rosidl's
 ``structure_needs_at_least_one_member`` byte.
 
 Services over rmw_cyclonedds put a 16-byte header (``uint64 guid`` of the client's request

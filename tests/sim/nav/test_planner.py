@@ -1,0 +1,189 @@
+"""sim.nav.planner: paths, Nav2 error codes, the fast routes agree with the exact search."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bt_runtime.runtime.messages import LaserScan, NavErrorCode, Pose2D
+from sim.nav.costmap import INSCRIBED, NO_INFORMATION, GlobalCostmap
+from sim.nav.occupancy import OccupancyGrid
+from sim.nav.params import PlannerParams
+from sim.nav.planner import GridPlanner, path_length
+from tests.sim.nav.fixtures import HOUSE, TB3_WORLD, small_world
+
+E = NavErrorCode
+
+
+def make(grid=None, **params) -> GridPlanner:
+    cm = GlobalCostmap(grid or small_world(), 0.1)
+    return GridPlanner(cm, PlannerParams(**params))
+
+
+def assert_valid_path(planner: GridPlanner, res, start: Pose2D, goal: Pose2D):
+    assert res.ok, res.message
+    pts = res.points
+    assert pts.shape[1] == 3
+    assert tuple(pts[0, :2]) == pytest.approx((start.x, start.y))
+    assert tuple(pts[-1, :2]) == pytest.approx((goal.x, goal.y))
+    assert pts[-1, 2] == pytest.approx(goal.yaw)
+    step = np.hypot(*np.diff(pts[:, :2], axis=0).T)
+    assert step.max() < 0.1  # dense (about a cell per step)
+    costs = planner.costmap.costs_at(pts[:, 0], pts[:, 1])
+    assert ((costs < INSCRIBED) | (costs == NO_INFORMATION)).all()
+
+
+def test_plans_through_the_door_of_the_synthetic_map():
+    pl = make()
+    s, g = Pose2D(1.0, 1.0), Pose2D(7.0, 5.0, 1.2)
+    res = pl.plan(s, g)
+    assert_valid_path(pl, res, s, g)
+    near_wall = res.points[np.abs(res.points[:, 0] - 4.0) < 0.05]
+    assert len(near_wall) and (np.abs(near_wall[:, 1] - 3.0) < 0.45).all()  # through the door
+    assert math.hypot(6, 4) < path_length(res.points) < 1.4 * math.hypot(6, 4) + 2
+    assert pl.is_path_valid(res.points)
+    assert 0.11 < pl.path_clearance(res.points) < 0.6
+
+
+@pytest.mark.skipif(not HOUSE.exists(), reason="shared/reference/worlds not available")
+@pytest.mark.parametrize("start,goal", [((-6.3, -1.5), (5.5, -4.3)), ((-4.0, 3.5), (1.2, 3.0)),
+                                        ((6.5, 1.0), (-2.0, -0.5))])
+def test_plans_in_the_turtlebot3_house(start, goal):
+    pl = make(OccupancyGrid.load(HOUSE))
+    s, g = Pose2D(*start), Pose2D(*goal)
+    res = pl.plan(s, g)
+    assert_valid_path(pl, res, s, g)
+    again = pl.plan(s, g)
+    assert again.method == "cached"
+    np.testing.assert_array_equal(again.points, res.points)
+
+
+@pytest.mark.skipif(not TB3_WORLD.exists(), reason="shared/reference/worlds not available")
+def test_plans_in_the_turtlebot3_world():
+    pl = make(OccupancyGrid.load(TB3_WORLD))
+    s, g = Pose2D(-2.0, -0.5), Pose2D(2.0, 0.5)
+    res = pl.plan(s, g)
+    assert_valid_path(pl, res, s, g)
+    # a pillar (r = 0.15) at (0, 0) sits between: the path keeps its distance from all pillars
+    assert pl.path_clearance(res.points) > 0.11
+
+
+def test_no_valid_path_when_the_door_is_blocked():
+    pl = make()
+    pl.costmap.add_obstacle(4.0, 3.0, 0.6)  # a map update closing the door
+    res = pl.plan(Pose2D(1.0, 1.0), Pose2D(7.0, 5.0))
+    assert res.error_code is E.NO_VALID_PATH
+
+
+def test_no_valid_path_when_a_sensed_obstacle_blocks_the_door():
+    pl = make()
+    s, g = Pose2D(1.0, 1.0), Pose2D(7.0, 5.0)
+    assert pl.plan(s, g).ok
+    # a scan from (3, 3) facing the door sees a wall of points across it
+    angles = np.linspace(-0.6, 0.6, 121)
+    ranges = 1.0 / np.cos(angles)
+    n = 360
+    r = np.full(n, np.nan)
+    idx = np.round(angles / (2 * math.pi / n)).astype(int) % n
+    r[idx] = ranges
+    pl.costmap.update_from_scan(LaserScan(0, 0.0, 2 * math.pi / n, 0.12, 3.5, r), Pose2D(3.0, 3.0))
+    res = pl.plan(s, g)
+    assert res.error_code is E.NO_VALID_PATH and res.method == "components"
+
+
+def test_goal_and_start_errors():
+    pl = make()
+    free = Pose2D(1.0, 1.0)
+    assert pl.plan(free, Pose2D(2.0, 4.5)).error_code is E.GOAL_OCCUPIED  # in the pillar
+    assert pl.plan(free, Pose2D(4.0, 1.0)).error_code is E.GOAL_OCCUPIED  # in the wall
+    assert pl.plan(free, Pose2D(20.0, 1.0)).error_code is E.GOAL_OUTSIDE_MAP
+    assert pl.plan(Pose2D(-3.0, 1.0), free).error_code is E.START_OUTSIDE_MAP
+    assert pl.plan(Pose2D(2.0, 4.5), free).error_code is E.START_OCCUPIED
+    tol = make(tolerance=0.5)
+    res = tol.plan(free, Pose2D(2.0, 4.5))
+    assert res.ok and math.hypot(res.points[-1, 0] - 2.0, res.points[-1, 1] - 4.5) < 1e-9
+
+
+def test_start_in_the_inscribed_band_can_escape():
+    pl = make()
+    s = Pose2D(0.12, 1.0)  # hugging the west wall: cost 253
+    assert pl.costmap.cost_at(s.x, s.y) == INSCRIBED
+    res = pl.plan(s, Pose2D(2.0, 1.0))
+    assert res.ok and res.points[-1, 0] == pytest.approx(2.0)
+
+
+def test_unknown_space_option():
+    grid = OccupancyGrid(np.zeros((60, 100), np.int8), 0.05, (0.0, 0.0, 0.0))
+    grid.data[:, 45:55] = -1  # an unknown band across the map
+    s, g = Pose2D(0.5, 1.5), Pose2D(4.5, 1.5)
+    assert make(grid, allow_unknown=True).plan(s, g).ok
+    assert make(grid, allow_unknown=False).plan(s, g).error_code is E.NO_VALID_PATH
+
+
+def test_planner_timeout():
+    pl = make(max_iterations=50, max_python_expansions=50)
+    s, g = Pose2D(1.0, 1.0), Pose2D(7.0, 5.0)
+    pl.costmap.add_phantom(2.5, 2.5, 0.1)  # the relaxed field knows it: still cached
+    assert pl.plan(s, g).ok
+    # a sensed obstacle near the route forces a search, which exceeds 50 iterations
+    pl.costmap.obstacle[40:80, 40:60] = 254
+    pl.costmap._recompute_all()
+    assert pl.plan(s, g).error_code is E.PLANNER_TIMEOUT
+
+
+def test_same_inputs_same_path():
+    a = make().plan(Pose2D(1.0, 1.0), Pose2D(7.0, 5.0))
+    b = make().plan(Pose2D(1.0, 1.0), Pose2D(7.0, 5.0))
+    np.testing.assert_array_equal(a.points, b.points)
+    assert a.cost == b.cost
+
+
+def test_fast_routes_find_optimal_costs():
+    """astar / cached / learned against the exact compiled Dijkstra on the same costmap."""
+    rng = np.random.default_rng(7)
+    pl = make(suboptimality_tolerance=0.0)
+    ref = make(max_python_expansions=1)
+    s, g = Pose2D(1.0, 1.0), Pose2D(7.0, 5.0)
+    for _ in range(6):
+        # random sensed blobs (not in the relaxed heuristic) near the route
+        x, y = rng.uniform(1.5, 7.0), rng.uniform(0.8, 5.2)
+        for cm in (pl.costmap, ref.costmap):
+            rows, cols = cm._disc_cells(x, y, 0.2)
+            cm.obstacle[rows, cols] = 254
+            cm._recompute_all()
+        a, b = pl.plan(s, g), ref.plan(s, g)
+        ref._learned.clear()
+        assert a.error_code == b.error_code
+        if a.ok:
+            assert a.method in ("cached", "astar", "learned", "dijkstra")
+            if a.method == "learned":
+                assert a.cost <= 1.2 * b.cost
+            else:
+                assert a.cost == pytest.approx(b.cost, rel=1e-9), a.method
+
+
+def test_cached_replan_is_within_tolerance():
+    pl = make(suboptimality_tolerance=0.05)
+    exact = make(suboptimality_tolerance=0.0, max_python_expansions=1)
+    s, g = Pose2D(1.0, 1.0), Pose2D(7.0, 5.0)
+    pl.plan(s, g)
+    for cm in (pl.costmap, exact.costmap):
+        cm.obstacle[62, 70] = 254  # one noisy mark beside the door
+        cm._recompute_all()
+    a, b = pl.plan(s, g), exact.plan(s, g)
+    assert a.ok and b.ok and a.cost <= 1.05 * b.cost + 1e-9
+
+
+def test_path_validity_and_clearance():
+    pl = make()
+    res = pl.plan(Pose2D(1.0, 1.0), Pose2D(7.0, 5.0))
+    assert pl.is_path_valid(res.points)
+    mid = res.points[len(res.points) // 2]
+    pl.costmap.add_phantom(mid[0], mid[1], 0.05)
+    assert not pl.is_path_valid(res.points)
+    assert not pl.is_path_valid(res.points, max_cost=254) or pl.costmap.cost_at(mid[0], mid[1]) < 254
+    assert pl.is_path_valid(res.points, start_index=len(res.points) - 5)
+    assert pl.path_clearance(res.points) == pytest.approx(0.0, abs=0.051)
+    assert not pl.is_path_valid(np.array([[100.0, 100.0]]))
