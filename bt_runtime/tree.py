@@ -158,11 +158,14 @@ class Tree:
         return status
 
     def sleep(self, duration: float) -> bool:
-        """Block up to ``duration`` s; return True early if woken (wake-up or a timer fired)."""
+        """Block up to ``duration`` s; return True early if a wake-up was emitted (a timer that
+        fires emits one). Like BT.CPP's ``Tree::sleep`` the wake-up is consumed, so the next
+        ``tick_once`` does not re-tick for a signal this sleep already answered."""
         clock = self.clock
         end = clock() + duration
         while True:
-            if self.timers.fire_due() or self.wake_up.is_set:
+            self.timers.fire_due()
+            if self.wake_up.check_and_clear():
                 return True
             now = clock()
             if now >= end:
@@ -189,6 +192,8 @@ class Tree:
                 wait = period if nxt is None else max(0.0, min(period, nxt - loop.time()))
                 with contextlib.suppress(TimeoutError):
                     await asyncio.wait_for(woken.wait(), wait)
+                self.timers.fire_due()
+                self.wake_up.check_and_clear()  # this wait answered it, as Tree::sleep does
                 status = self.tick_once()
             return status
         except BaseException:
