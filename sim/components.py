@@ -10,7 +10,8 @@ messages; ``restart()`` brings it back after its restart delay, or fails (stays 
 
 Driver-level faults (set by the fault injector, cleared by a restart):
   * silent until t: stops publishing without changing state (a hung process);
-  * stale until t: republishes the last message unchanged (duplicate, old timestamp);
+  * stale until t: republishes the last message unchanged (duplicate, old timestamp), or
+    with fresh timestamps ('frozen');
   * corrupt until t: 'nan' or 'garbage' data;
   * noise scale until t: the sensor noise sigma is multiplied.
 """
@@ -18,6 +19,7 @@ Driver-level faults (set by the fault injector, cleared by a restart):
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -60,6 +62,7 @@ class Component:
     def clear_faults(self) -> None:
         self.silent_until = NEG_INF
         self.stale_until = NEG_INF
+        self.stale_restamp = False  # 'frozen': the stale data goes out with fresh timestamps
         self.corrupt_until = NEG_INF
         self.corrupt_mode = ""
         self.noise_until = NEG_INF
@@ -151,7 +154,10 @@ class Driver(Component):
         if now < self.stale_until and self.last_message is not None:
             self.skip(now)
             self.published += 1
-            self._publish(self.topic, self.last_message)
+            msg = self.last_message
+            if self.stale_restamp:
+                msg = dataclasses.replace(msg, stamp=now)
+            self._publish(self.topic, msg)
             return
         msg = self.sample(now)
         if msg is None:

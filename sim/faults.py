@@ -69,12 +69,13 @@ class RestartPolicy(_Fault):
 
 class Stall(_Fault):
     """Without crashing: 'silent' stops publishing, 'stale' republishes the last message
-    (duplicate, old timestamp), for ``duration`` seconds (a restart ends it)."""
+    (duplicate, old timestamp), 'frozen' republishes the last message's data with fresh
+    timestamps (a driver stuck on one reading), for ``duration`` seconds (a restart ends it)."""
 
     kind: Literal["stall"] = "stall"
     component: str
     duration: float = Field(gt=0)
-    mode: Literal["silent", "stale"] = "silent"
+    mode: Literal["silent", "stale", "frozen"] = "silent"
 
 
 class Corrupt(_Fault):
@@ -314,6 +315,7 @@ class FaultInjector:
             comp.silent_until = until
         else:
             comp.stale_until = until
+            comp.stale_restamp = f.mode == "frozen"
         self._record(f, until=until)
 
     def _do_corrupt(self, f: Corrupt) -> None:

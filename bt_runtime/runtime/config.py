@@ -42,6 +42,10 @@ class SupervisorConfig(_Model):
     recovery_timeout: float = Field(2.0, gt=0, description="after a restart, data must flow within this")
     dependency_grace: float = Field(1.0, ge=0, description="after a dependency recovers, give the components "
                                                            "that need it this long to recover by themselves")
+    check_data: bool = Field(True, description="only fresh, valid data proves a component alive (stale "
+                                               "timestamps, repeated identical scans and NaN data do not)")
+    invalid_share: float = Field(0.3, ge=0, le=1, description="a scan with more than this share of NaN or "
+                                                              "out-of-range ranges is invalid")
     components: dict[str, ComponentWatch] = Field(default_factory=dict)
 
 

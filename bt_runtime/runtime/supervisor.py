@@ -1,7 +1,10 @@
 """The system supervisor: a watchdog over every component (the paper's fn_req1/2/5, non_freq1).
 
 Each component proves it is alive by its messages (sensor streams, navigation heartbeats, the
-tree's own tick heartbeat). Silent longer than its timeout (default 1 s) -> FAILED. Restarts
+tree's own tick heartbeat). Only fresh, plausible data counts (``data_checks``): a driver that
+republishes old messages, repeats one frozen scan or sends NaN/out-of-range data is as broken
+as a silent one. No good data for longer than its timeout (default 1 s) -> FAILED, with the
+reason (silent, stale data, invalid data). Restarts
 happen on request (the tree asks) or automatically; after ``max_failed_restarts`` (2) failed
 restarts a component is DEAD, and a dead critical component stops the robot through the
 decision gate. Condition nodes ask through non-blocking queries; every state change is an
@@ -19,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import structlog
 
 from .config import SupervisorConfig
+from .data_checks import DataCheck
 from .messages import ComponentInfo
 
 if TYPE_CHECKING:
@@ -54,7 +58,7 @@ class ComponentRecord:
 
     __slots__ = ("name", "kind", "streams", "timeout", "critical", "auto_restart", "restartable",
                  "state", "last_seen", "failed_restarts", "restarts", "failures", "restart_fn",
-                 "restart_task", "state_since", "watched", "depends_on")
+                 "restart_task", "state_since", "watched", "depends_on", "last_message", "problem")
 
     def __init__(self, name: str, kind: str, streams: tuple[str, ...], timeout: float, critical: bool,
                  auto_restart: bool, restartable: bool,
@@ -67,7 +71,9 @@ class ComponentRecord:
         self.auto_restart = auto_restart
         self.restartable = restartable
         self.state = Health.UNKNOWN
-        self.last_seen: float | None = None
+        self.last_seen: float | None = None  # last good (fresh, valid) message
+        self.last_message: float | None = None  # last message of any kind
+        self.problem = ""  # what was wrong with the last bad message
         self.failed_restarts = 0
         self.restarts = 0
         self.failures = 0
@@ -120,6 +126,13 @@ class SystemSupervisor:
         for stream in info.streams:
             self._unsubscribe.append(self.driver.subscribe(stream, self._seen_callback(record)))
 
+    def _silence_reason(self, record: ComponentRecord, now: float) -> str:
+        """Why no good data arrived: silence, or the problem with the data that did arrive."""
+        since = record.last_seen if record.last_seen is not None else self._started_at
+        bad_data = record.last_message is not None and record.last_message > since and record.problem
+        what = record.problem if bad_data else "silent"
+        return f"{what} for {now - since:.2f} s (timeout {record.timeout} s)"
+
     def register_local(self, name: str, *, timeout: float | None = None, critical: bool = True,
                        restart: Callable[[], Awaitable[bool]] | None = None, auto_restart: bool = False,
                        kind: str = "runtime") -> None:
@@ -136,9 +149,17 @@ class SystemSupervisor:
 
     def _seen_callback(self, record: ComponentRecord) -> Callable[[Any], None]:
         clock = self.clock
+        check = DataCheck(self.config.invalid_share) if self.config.check_data else None
 
-        def seen(_msg: Any) -> None:
-            record.last_seen = clock()
+        def seen(msg: Any) -> None:
+            now = clock()
+            record.last_message = now
+            if check is not None:
+                problem = check(msg)
+                if problem is not None:
+                    record.problem = problem
+                    return
+            record.last_seen = now
             if record.state is Health.UNKNOWN or record.state is Health.FAILED:
                 self._set_state(record, Health.OK, "messages flowing")
 
@@ -205,10 +226,11 @@ class SystemSupervisor:
             state = record.state
             if state is Health.OK:
                 if record.last_seen is not None and now - record.last_seen > record.timeout:
-                    self._fail(record, f"silent for {now - record.last_seen:.2f} s (timeout {record.timeout} s)")
+                    self._fail(record, self._silence_reason(record, now))
             elif state is Health.UNKNOWN:
                 if now - self._started_at > max(self.config.startup_grace, record.timeout):
-                    self._fail(record, "never heard from")
+                    self._fail(record, f"never heard from ({record.problem})" if record.problem
+                               else "never heard from")
 
     def _fail(self, record: ComponentRecord, reason: str) -> None:
         record.failures += 1
@@ -324,8 +346,7 @@ class SystemSupervisor:
         if record.state is Health.OK and self.health(name) is Health.FAILED:
             # its timeout expired but the watchdog has not run yet: record the failure first
             record.failures += 1
-            self._set_state(record, Health.FAILED,
-                            f"silent for {self.clock() - record.last_seen:.2f} s (timeout {record.timeout} s)")
+            self._set_state(record, Health.FAILED, self._silence_reason(record, self.clock()))
         cfg = self.config
         record.restarts += 1
         started = self.clock()
