@@ -109,6 +109,8 @@ def _run_task(task: Task, keep_trajectory: bool) -> tuple[dict[str, Any], Any]:
         traj = {"trajectory": rec.trajectory[:, :3].copy(),
                 "marks": [(r.goal.x, r.goal.y) for r in rec.nav_requests if r.method == "add_obstacle"],
                 "faults": [(f.t, f.kind) for f in rec.fault_log],
+                "collisions": [tuple(map(float, e.data["point"])) for e in rec.sim_events
+                               if e.kind == "collision" and e.data.get("point") is not None],
                 "goals": [(g.pose.x, g.pose.y) for g in rec.goals]}
     return out, traj
 

@@ -10,6 +10,7 @@ from PIL import Image
 from sim import Simulator
 from sim.geometry import Raster
 from sim.render import render_png
+from sim.render_layout import Layout
 from sim.testing import run_virtual
 
 
@@ -31,7 +32,7 @@ def test_render_everything(tmp_path):
                      obstacles=sim.dynamic_obstacles.values(), robot=sim.pose, scale=40)
     img = np.asarray(Image.open(out).convert("RGB"))
     b = sim.world.bounds
-    assert img.shape[1] == int(np.ceil(b.width * 40)) + 20
+    assert img.shape[1] == Layout.of(b, 40).width and Layout.of(b, 40).map_w == int(np.ceil(b.width * 40))
     colours = {tuple(c) for c in img.reshape(-1, 3)[::7]}
     assert (60, 66, 80) in colours  # lidar + body obstacles
     assert (250, 170, 60) in colours  # the body-only obstacle
