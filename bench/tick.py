@@ -7,15 +7,23 @@ Shapes (leaves are Python callbacks in every engine):
   autonomy52  52 nodes shaped like trees/autonomy.xml: ReactiveSequence root, an e-stop
               guard, 10 Fallback(health check, recover), a ReactiveFallback of 5 guarded
               behaviours, a navigate branch left RUNNING
-Also: time to load a 500-node tree from XML.
+Generated shapes (bench/treegen.py), at 10 / 100 / 1 000 / 10 000 nodes: Python leaves,
+built-in leaves, scripts, pre/post conditions, blackboard-heavy 3-level remapped SubTrees,
+and mixed trees with every control kind; and Nav2's stock trees (../shared, if present) with
+their leaves as callbacks.
 
-Prints the median microseconds per tick and the ratios to BT.CPP-py and py_trees.
-Run: python bench/tick.py [--repeat N]
+Every figure is CPU time (time.process_time) per tick: the engines run interleaved inside
+each repetition (so machine load hits them alike), and each row prints the median with the
+range (min-max over repetitions) and the ratio of medians to BT.CPP-py and py_trees. Load
+time is measured with the garbage collector on, as a user has it.
+
+Run: python bench/tick.py [--quick] [--shapes a,b] [--sizes 10,100] [--repeat N]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 
@@ -75,17 +83,24 @@ def count_nodes(xml: str) -> int:
 
 # ---- engines ---------------------------------------------------------------------------------
 
-def ours_tree(xml: str):
+def ours_tree(xml: str, preset: dict | None = None):
+    from bt_runtime.blackboard import Blackboard
+
     f = BehaviorTreeFactory()
     f.register_simple_condition("Ok", lambda n: SUCCESS)
     f.register_simple_condition("No", lambda n: FAILURE)
     f.register_simple_action("Act", lambda n: SUCCESS)
     f.register_simple_stateful_action("Run", lambda n: RUNNING, lambda n: RUNNING, lambda n: None)
-    tree = f.create_tree_from_text(xml)
+    f.register_simple_decorator("Pass", lambda status, n: status)
+    bb = Blackboard.create()
+    for key, value in (preset or {}).items():
+        bb.set(key, value)
+    tree = f.create_tree_from_text(xml, bb)
+    ours_tree.keep = tree
     return tree.tick_exactly_once
 
 
-def btcpp_tree(xml: str):
+def btcpp_tree(xml: str, preset: dict | None = None):
     import behaviortreepy as bt
     ok, no, run = bt.NodeStatus.SUCCESS, bt.NodeStatus.FAILURE, bt.NodeStatus.RUNNING
     f = bt.BehaviorTreeFactory()
@@ -93,12 +108,21 @@ def btcpp_tree(xml: str):
     f.register_simple_condition("No", lambda n: no)
     f.register_simple_action("Act", lambda n: ok)
     f.register_simple_stateful_action("Run", lambda n: run, lambda n: run, lambda n: None)
-    tree = f.create_tree_from_text(xml)
-    btcpp_tree.keep = tree  # keep alive
+    f.register_simple_decorator("Pass", lambda status, n: status)
+    bb = bt.Blackboard.create(None)
+    for key, value in (preset or {}).items():
+        if isinstance(value, bool):
+            bb.set_bool(key, value)
+        elif isinstance(value, str):
+            bb.set_string(key, value)
+        else:
+            bb.set_double(key, float(value))
+    tree = f.create_tree_from_text(xml, bb)
+    btcpp_tree.keep = (tree, bb)  # keep alive
     return tree.tick_exactly_once
 
 
-def pytrees_tree(xml: str):
+def pytrees_tree(xml: str, preset: dict | None = None):
     """Translate our XML shapes into py_trees (memoryless composites = BT.CPP semantics)."""
     import py_trees
     from lxml import etree
@@ -120,8 +144,10 @@ def pytrees_tree(xml: str):
             return Leaf(name, Status.SUCCESS)
         if tag == "No":
             return Leaf(name, Status.FAILURE)
-        if tag == "Act":
+        if tag in ("Act", "AlwaysSuccess"):
             return Leaf(name, Status.SUCCESS)
+        if tag == "AlwaysFailure":
+            return Leaf(name, Status.FAILURE)
         if tag == "Run":
             return Leaf(name, Status.RUNNING)
         kids = [build(c) for c in e]
@@ -135,85 +161,167 @@ def pytrees_tree(xml: str):
             return py_trees.composites.Selector(name, memory=False, children=kids)
         if tag == "Inverter":
             return py_trees.decorators.Inverter(name, child=kids[0])
-        raise ValueError(tag)
+        raise NotImplementedError(tag)
 
-    root = build(etree.fromstring(xml.encode())[0][0])
+    trees = etree.fromstring(xml.encode())
+    if len(trees) != 1 or preset:
+        raise NotImplementedError("py_trees has no BT.CPP scripts, SubTrees or pre-conditions")
+    root = build(trees[0][0])
     tree = py_trees.trees.BehaviourTree(root)
     tree.setup()
-    return root.tick_once
+    tick_once = root.tick_once
+
+    def tick():
+        tick_once()
+        return root.status
+
+    return tick
 
 
-def measure(tick, repeat: int, inner: int) -> float:
-    """Median microseconds per tick over ``repeat`` batches of ``inner`` ticks."""
-    for _ in range(inner):
-        tick()
-    samples = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
+ENGINES = {"bt_runtime": ours_tree, "BT.CPP-py": btcpp_tree, "py_trees": pytrees_tree}
+
+
+def _inner_for(nodes: int) -> int:
+    """Ticks per timed batch: about 2 ms of work, at least one tick."""
+    return max(1, 20_000 // max(nodes, 1))
+
+
+def measure_interleaved(ticks: dict, repeat: int, inner: int) -> dict[str, list[float]]:
+    """CPU microseconds per tick of every engine, ``repeat`` batches each, engines interleaved."""
+    for tick in ticks.values():
         for _ in range(inner):
             tick()
-        samples.append((time.perf_counter() - t0) / inner * 1e6)
-    return statistics.median(samples)
-
-
-def _time_loads(load, repeat: int) -> tuple[float, float]:
-    """Median and 90th percentile (ms) of `repeat` loads, after a warm-up of five."""
-    for _ in range(5):
-        load()
-    times = []
+    samples: dict[str, list[float]] = {name: [] for name in ticks}
+    clock = time.process_time
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        load()
-        times.append((time.perf_counter() - t0) * 1e3)
-    times.sort()
-    return statistics.median(times), times[int(0.9 * (len(times) - 1))]
+        for name, tick in ticks.items():
+            t0 = clock()
+            for _ in range(inner):
+                tick()
+            samples[name].append((clock() - t0) / inner * 1e6)
+    return samples
 
 
-def measure_load(repeat: int) -> tuple[tuple[float, float], tuple[float, float] | None, int]:
-    xml = big500()
-    n = count_nodes(xml)
-    f = BehaviorTreeFactory()
-    for name in ("Ok", "No"):
-        f.register_simple_condition(name, lambda node: SUCCESS)
-    ours = _time_loads(lambda: f.create_tree_from_text(xml), repeat)
-    try:
-        import behaviortreepy as bt
-    except ImportError:
-        return ours, None, n
-    g = bt.BehaviorTreeFactory()
-    for name in ("Ok", "No"):
-        g.register_simple_condition(name, lambda node: bt.NodeStatus.SUCCESS)
-    return ours, _time_loads(lambda: g.create_tree_from_text(xml), repeat), n
+def _build_all(xml: str, preset: dict | None) -> dict:
+    ticks = {}
+    for name, build in ENGINES.items():
+        with contextlib.suppress(ImportError, NotImplementedError):  # an engine that lacks the feature
+            ticks[name] = build(xml, preset)
+    return ticks
+
+
+def _check_same_status(ticks: dict, n: int = 3) -> str:
+    """Root status of the first ticks in every engine (speed must never change a trace)."""
+    seen = {name: [str(getattr(t(), "name", "?")).upper() for _ in range(n)] for name, t in ticks.items()}
+    first = next(iter(seen.values()))
+    return "" if all(v == first for v in seen.values()) else f"  STATUS DIFFERS {seen}"
+
+
+def _fmt(samples: list[float] | None) -> str:
+    if not samples:
+        return f"{'n/a':>26}"
+    med = statistics.median(samples)
+    return f"{med:>10.2f} ({min(samples):.2f}-{max(samples):.2f})".rjust(26)
+
+
+def _ratio(ours: list[float], peer: list[float] | None) -> str:
+    if not peer:
+        return f"{'n/a':>10}"
+    return f"{statistics.median(ours) / statistics.median(peer):>9.2f}x"
+
+
+def _print_header() -> None:
+    print(f"{'shape':<22}{'nodes':>7}" + "".join(f"{e + ' us/tick':>26}" for e in ENGINES)
+          + f"{'vs BT.CPP':>10}{'vs py_trees':>12}")
+
+
+def _print_row(shape: str, nodes: int, samples: dict, note: str = "") -> None:
+    ours = samples["bt_runtime"]
+    print(f"{shape:<22}{nodes:>7}" + "".join(_fmt(samples.get(e)) for e in ENGINES)
+          + _ratio(ours, samples.get("BT.CPP-py")) + _ratio(ours, samples.get("py_trees")).rjust(12) + note)
+
+
+def run_classic(repeat: int) -> None:
+    for shape, make in SHAPES.items():
+        xml = make()
+        ticks = _build_all(xml, None)
+        nodes = count_nodes(xml)
+        _print_row(shape, nodes, measure_interleaved(ticks, repeat, _inner_for(nodes)), _check_same_status(ticks))
+
+
+def run_generated(shapes: list[str], sizes: list[int], repeat: int) -> None:
+    from treegen import SHAPES as GENERATED
+
+    for shape in shapes:
+        for size in sizes:
+            g = GENERATED[shape](size)
+            ticks = _build_all(g.xml, g.preset)
+            note = _check_same_status(ticks)
+            _print_row(shape, g.nodes, measure_interleaved(ticks, repeat, _inner_for(g.nodes)), note)
+
+
+def run_nav2(repeat: int) -> None:
+    from nav2_shapes import stock_trees
+
+    for name, xml in stock_trees():
+        ticks = _build_all(xml, None)
+        nodes = count_nodes(xml)
+        _print_row(name[:22], nodes, measure_interleaved(ticks, repeat, _inner_for(nodes)), _check_same_status(ticks))
+
+
+def load_times(shape: str, sizes: list[int], loads: int) -> None:
+    """Median load time (ms, GC on) of bt_runtime and BT.CPP-py; the second load of a big
+    tree after dropping the first shows whether a dropped tree waits for the cyclic GC."""
+    import gc
+
+    from treegen import SHAPES as GENERATED
+
+    gc.enable()
+    print(f"\nload time, {shape} trees, GC on (median of {loads} loads; ms and us per node)")
+    print(f"{'nodes':>7}{'bt_runtime':>22}{'BT.CPP-py':>22}{'ratio':>8}")
+    for size in sizes:
+        g = GENERATED[shape](size)
+        times: dict[str, list[float]] = {"bt_runtime": [], "BT.CPP-py": []}
+        builders = {"bt_runtime": ours_tree, "BT.CPP-py": btcpp_tree}
+        for _ in range(loads):
+            for name, build in builders.items():
+                t0 = time.perf_counter()
+                try:
+                    build(g.xml, g.preset)
+                except ImportError:
+                    continue
+                times[name].append((time.perf_counter() - t0) * 1e3)
+        cells = []
+        for name in builders:
+            if times[name]:
+                med = statistics.median(times[name])
+                cells.append(f"{med:>10.2f} ms {med * 1e3 / g.nodes:>6.2f} us")
+            else:
+                cells.append(f"{'n/a':>22}")
+        ratio = (f"{statistics.median(times['bt_runtime']) / statistics.median(times['BT.CPP-py']):>7.2f}x"
+                 if times["BT.CPP-py"] else "")
+        print(f"{g.nodes:>7}" + "".join(c.rjust(22) for c in cells) + ratio)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--repeat", type=int, default=15)
-    parser.add_argument("--inner", type=int, default=2000)
-    parser.add_argument("--load-repeat", type=int, default=101, help="timed loads of the 500-node tree")
+    parser.add_argument("--repeat", type=int, default=15, help="timed batches per engine and row")
+    parser.add_argument("--shapes", default="leaves,builtin,scripts,precond,bbheavy,mixed")
+    parser.add_argument("--sizes", default="10,100,1000,10000")
+    parser.add_argument("--load-sizes", default="100,1000,5000,20000")
+    parser.add_argument("--loads", type=int, default=7)
+    parser.add_argument("--quick", action="store_true", help="sizes 10,100,1000, 5 repetitions, small loads")
     args = parser.parse_args()
-    engines = {"bt_runtime": ours_tree, "BT.CPP-py": btcpp_tree, "py_trees": pytrees_tree}
-    print(f"{'shape':<12}{'nodes':>6}" + "".join(f"{e:>14}" for e in engines)
-          + f"{'vs BT.CPP':>11}{'vs py_trees':>13}")
-    for shape, make in SHAPES.items():
-        xml = make()
-        results = {}
-        for engine, build in engines.items():
-            try:
-                results[engine] = measure(build(xml), args.repeat, args.inner)
-            except ImportError:
-                results[engine] = None
-        ours = results["bt_runtime"]
-        row = f"{shape:<12}{count_nodes(xml):>6}"
-        row += "".join(f"{results[e]:>12.2f}us" if results[e] is not None else f"{'n/a':>14}" for e in engines)
-        for peer in ("BT.CPP-py", "py_trees"):
-            row += f"{ours / results[peer]:>11.2f}x" if results[peer] else f"{'n/a':>11}"
-        print(row)
-    (ours_ms, ours_p90), theirs, n = measure_load(max(5, args.load_repeat))
-    peer = (f"; BT.CPP-py {theirs[0]:.2f} ms (p90 {theirs[1]:.2f}; ratio {ours_ms / theirs[0]:.2f}x)"
-            if theirs else "")
-    print(f"load {n}-node tree from XML: bt_runtime {ours_ms:.2f} ms (p90 {ours_p90:.2f}){peer}")
-    print("(ratio < 1 means bt_runtime is faster; medians of per-tick microseconds)")
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    if args.quick:
+        args.sizes, args.repeat, args.load_sizes, args.loads = "10,100,1000", 5, "100,1000,5000", 3
+    sizes = [int(s) for s in args.sizes.split(",")]
+    _print_header()
+    run_classic(args.repeat)
+    run_generated(args.shapes.split(","), sizes, args.repeat)
+    run_nav2(args.repeat)
+    load_times("mixed", [int(s) for s in args.load_sizes.split(",")], args.loads)
+    print("\nCPU time per tick: median (min-max) over repetitions; ratio < 1 means bt_runtime is faster.")
 
 
 if __name__ == "__main__":
