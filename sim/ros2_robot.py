@@ -37,7 +37,7 @@ import structlog
 
 from bt_runtime.runtime.messages import ActionStatus, ComponentState, Path, Pose2D
 from bt_runtime.runtime.ros2 import dds, idl
-from bt_runtime.runtime.ros2.driver import pose2d_of, pose_msg, quaternion_of
+from bt_runtime.runtime.ros2.convert import pose2d_of, pose_msg, quaternion_of
 
 from .driver import SimDriver
 from .faults import Crash, parse_fault

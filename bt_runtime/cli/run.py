@@ -118,10 +118,15 @@ def load_config(path: Path | None):
 def make_driver(args: argparse.Namespace):
     if args.driver == "ros2":
         try:
-            from ..runtime.ros2 import Ros2Driver  # provided by the [ros2] extra
+            from ..runtime.ros2 import Ros2Config, Ros2Driver  # provided by the [ros2] extra
         except ImportError as exc:
             raise UsageError(f"--driver ros2 is not available: {exc}") from None
-        return Ros2Driver.from_args(args)
+        path = getattr(args, "ros2_config", None)
+        try:
+            config = Ros2Config.load(path) if path else Ros2Config()
+        except ValueError as exc:  # names the file and field; no traceback
+            raise UsageError(str(exc)) from None
+        return Ros2Driver(config.with_environment())
     from sim.driver import SimDriver
 
     try:

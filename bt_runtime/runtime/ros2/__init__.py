@@ -2,6 +2,7 @@
 Python binding, without a ROS installation. See docs/ros2.md."""
 
 from .config import Ros2Config
-from .driver import Ros2Driver, Ros2Navigation
+from .driver import Ros2Driver
+from .navigation import Ros2Navigation
 
 __all__ = ["Ros2Config", "Ros2Driver", "Ros2Navigation"]

@@ -6,6 +6,7 @@ names ``sim-robot`` uses and a TurtleBot3 / ROSbot with Nav2 (Jazzy) and AMCL.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Literal
 
@@ -169,6 +170,13 @@ class Ros2Config(_Model):
                 comp.streams = [f"lifecycle/{name}"]
                 if comp.rate_hz == 0:
                     comp.rate_hz = self.lifecycle.poll_hz
+        return self
+
+    def with_environment(self) -> Ros2Config:
+        """ROS's convention: ``ROS_DOMAIN_ID`` names the domain when the file does not."""
+        env = os.environ.get("ROS_DOMAIN_ID", "")
+        if "domain_id" not in self.model_fields_set and env.isdigit():
+            self.domain_id = int(env)
         return self
 
     @classmethod

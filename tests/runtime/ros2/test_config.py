@@ -9,8 +9,8 @@ pytest.importorskip("cyclonedds")
 
 from bt_runtime.runtime.messages import ComponentState, Pose2D  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, idl  # noqa: E402
+from bt_runtime.runtime.ros2.convert import Converter, Drop, error_code_of, pose2d_of, pose_msg  # noqa: E402
 from bt_runtime.runtime.ros2.dds import fq_name  # noqa: E402
-from bt_runtime.runtime.ros2.driver import Converter, Drop, error_code_of, pose2d_of, pose_msg  # noqa: E402
 
 CONFIG = """
 domain_id: 42
@@ -30,11 +30,14 @@ robot: {radius: 0.155, max_linear: 0.9, max_angular: 3.0, capacity_ah: 3.5}
 """
 
 
-def test_config_file_and_from_args(tmp_path, monkeypatch):
+def test_config_file_and_cli_driver(tmp_path, monkeypatch):
+    from bt_runtime.cli.run import UsageError, make_driver
+
     path = tmp_path / "robot.yaml"
     path.write_text(CONFIG)
     monkeypatch.setenv("ROS_DOMAIN_ID", "7")
-    driver = Ros2Driver.from_args(argparse.Namespace(ros2_config=path, world="apartment", robot="burger"))
+    driver = make_driver(argparse.Namespace(driver="ros2", ros2_config=path, world="apartment", robot="burger"))
+    assert isinstance(driver, Ros2Driver)
     cfg = driver.config
     assert cfg.domain_id == 42  # the file wins over ROS_DOMAIN_ID
     assert cfg.topics.scan.name == "/lidar/scan" and cfg.topics.scan.qos.depth == 2
@@ -46,8 +49,11 @@ def test_config_file_and_from_args(tmp_path, monkeypatch):
     assert infos["amcl"].extra["depends_on"] == ("wheels",)
     info = driver.robot_info()
     assert (info.radius, info.max_linear, info.capacity_ah) == (0.155, 0.9, 3.5)
-    default = Ros2Driver.from_args(argparse.Namespace(ros2_config=None))
+    default = make_driver(argparse.Namespace(driver="ros2", ros2_config=None))
     assert default.config.domain_id == 7  # ROS_DOMAIN_ID when the file does not say
+    (tmp_path / "bad.yaml").write_text("domain_id: -1\n")
+    with pytest.raises(UsageError, match="bad.yaml"):  # a bad file is a usage error, not a traceback
+        make_driver(argparse.Namespace(driver="ros2", ros2_config=tmp_path / "bad.yaml"))
 
 
 def test_config_errors_name_the_file_and_field(tmp_path):

@@ -1,0 +1,180 @@
+"""ROS 2 messages <-> the runtime's messages: poses and quaternions, the validating sensor
+converter (a message that fails its limits raises ``Drop``), paths and Nav2 error codes.
+
+``sim/ros2_robot.py`` (the simulated robot on the other side of DDS) uses the same pose helpers,
+so both ends of the wire agree on the conventions.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..messages import (
+    BatteryState,
+    Contact,
+    Imu,
+    LaserScan,
+    LocalizedPose,
+    NavErrorCode,
+    Odometry,
+    Path,
+    Pose2D,
+    Twist,
+)
+from . import idl
+from .config import Ros2Config
+
+E = NavErrorCode
+
+
+def yaw_of(q: idl.Quaternion) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def quaternion_of(yaw: float) -> idl.Quaternion:
+    return idl.Quaternion(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+
+
+def pose2d_of(pose: idl.Pose) -> Pose2D:
+    return Pose2D(pose.position.x, pose.position.y, yaw_of(pose.orientation))
+
+
+def pose_msg(p: Pose2D) -> idl.Pose:
+    return idl.Pose(position=idl.Point(p.x, p.y, 0.0), orientation=quaternion_of(p.yaw))
+
+
+def _finite(*values: float) -> bool:
+    return all(math.isfinite(v) for v in values)
+
+
+class Drop(Exception):  # noqa: N818 - a verdict, not an error
+    """A message that fails validation."""
+
+
+class Converter:
+    """ROS messages -> runtime messages, with the validation limits of the config."""
+
+    def __init__(self, config: Ros2Config):
+        self.v = config.validation
+
+    def scan(self, m: idl.LaserScan, now: float) -> LaserScan:
+        v = self.v
+        n = len(m.ranges)
+        if n == 0 or n > v.max_scan_beams:
+            raise Drop(f"{n} beams")
+        if not _finite(m.angle_min, m.angle_max, m.angle_increment, m.range_min, m.range_max):
+            raise Drop("non-finite scan geometry")
+        if m.angle_increment == 0 or not (0 <= m.range_min < m.range_max <= v.max_range):
+            raise Drop("absurd scan geometry")
+        expected = (m.angle_max - m.angle_min) / m.angle_increment + 1
+        if abs(expected - n) > 1.5:
+            raise Drop(f"{n} ranges for {expected:.0f} beams")
+        if m.intensities and len(m.intensities) != n:
+            raise Drop("intensities and ranges differ in size")
+        ranges = np.asarray(m.ranges, dtype=np.float32)
+        nan = np.isnan(ranges)
+        if nan.mean() > v.max_nan_fraction:
+            raise Drop(f"{int(nan.sum())} of {n} ranges NaN")
+        finite = ranges[np.isfinite(ranges)]
+        if finite.size and (finite.min() < 0 or finite.max() > 10 * m.range_max):
+            raise Drop("ranges out of bounds")
+        return LaserScan(now, float(m.angle_min), float(m.angle_increment), float(m.range_min),
+                         float(m.range_max), ranges)
+
+    def imu(self, m: idl.Imu, now: float) -> Imu:
+        v = self.v
+        w, a, q = m.angular_velocity, m.linear_acceleration, m.orientation
+        if not _finite(w.x, w.y, w.z, a.x, a.y, a.z, q.x, q.y, q.z, q.w):
+            raise Drop("non-finite imu")
+        if abs(w.z) > v.max_yaw_rate or max(abs(a.x), abs(a.y), abs(a.z)) > v.max_accel:
+            raise Drop("absurd imu")
+        norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+        known = m.orientation_covariance[0] != -1.0 and norm > 0
+        if known and abs(norm - 1.0) > 0.1:
+            raise Drop("orientation is not a unit quaternion")
+        return Imu(now, float(w.z), float(a.x), float(a.y), yaw_of(q) if known else 0.0)
+
+    def odom(self, m: idl.Odometry, now: float) -> Odometry:
+        v = self.v
+        p, q, t = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
+        if not _finite(p.x, p.y, q.x, q.y, q.z, q.w, t.linear.x, t.angular.z):
+            raise Drop("non-finite odometry")
+        if max(abs(p.x), abs(p.y)) > v.max_position or abs(t.linear.x) > v.max_speed \
+                or abs(t.angular.z) > v.max_yaw_rate:
+            raise Drop("absurd odometry")
+        if q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w < 1e-6:
+            raise Drop("zero quaternion")
+        return Odometry(now, Pose2D(p.x, p.y, yaw_of(q)), Twist(float(t.linear.x), float(t.angular.z)))
+
+    def pose(self, m: idl.PoseWithCovarianceStamped, now: float) -> LocalizedPose:
+        p, q = m.pose.pose.position, m.pose.pose.orientation
+        cov = m.pose.covariance
+        if not _finite(p.x, p.y, q.x, q.y, q.z, q.w, cov[0], cov[7], cov[35]):
+            raise Drop("non-finite pose")
+        if max(abs(p.x), abs(p.y)) > self.v.max_position:
+            raise Drop("absurd pose")
+        if q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w < 1e-6:
+            raise Drop("zero quaternion")
+        sigma = math.sqrt(max(0.0, (cov[0] + cov[7]) / 2.0))
+        return LocalizedPose(now, Pose2D(p.x, p.y, yaw_of(q)), sigma)
+
+    def battery(self, m: idl.BatteryState, now: float) -> BatteryState:
+        if not _finite(m.voltage, m.percentage) or not (0 <= m.voltage <= self.v.max_voltage):
+            raise Drop("bad voltage or percentage")
+        if not (-0.001 <= m.percentage <= 1.001):
+            raise Drop("percentage outside 0..1")
+        current = float(m.current) if math.isfinite(m.current) else 0.0
+        capacity = float(m.capacity) if math.isfinite(m.capacity) else 0.0
+        # ROS: current is negative while discharging; ours is positive when discharging
+        return BatteryState(now, float(m.voltage), float(m.percentage) * 100.0, -current,
+                            float(m.voltage) * -current, capacity)
+
+    def bumper_bool(self, m: idl.Bool, now: float) -> Contact:
+        return Contact(now, bool(m.data))
+
+    def bumper_vector(self, m: idl.Vector3Stamped, now: float) -> Contact:
+        x, y, z = m.vector.x, m.vector.y, m.vector.z
+        if not _finite(x, y, z):
+            raise Drop("non-finite contact")
+        if x == 0.0 and y == 0.0:
+            return Contact(now, False)
+        return Contact(now, True, math.atan2(y, x), None, float(z))
+
+    def twist(self, m: idl.Twist, now: float) -> Twist:
+        v, w = m.linear.x, m.angular.z
+        if not _finite(v, w) or abs(v) > self.v.max_speed or abs(w) > self.v.max_yaw_rate:
+            raise Drop("bad velocity command")
+        return Twist(float(v), float(w))
+
+
+
+# ---------------------------------------------------------------------------------------------
+# Nav2 results
+# ---------------------------------------------------------------------------------------------
+
+UNKNOWN_CODE = {"navigate_to_pose": E.NAVIGATE_UNKNOWN, "compute_path_to_pose": E.PLANNER_UNKNOWN,
+                "follow_path": E.CONTROLLER_UNKNOWN, "spin": E.BEHAVIOR_UNKNOWN, "backup": E.BEHAVIOR_UNKNOWN,
+                "drive_on_heading": E.BEHAVIOR_UNKNOWN, "wait": E.BEHAVIOR_UNKNOWN}
+# Jazzy gives BackUp 710.., DriveOnHeading 720.., Wait 740..; the runtime uses Spin's 700..
+BEHAVIOR_CODES = {710: E.BEHAVIOR_UNKNOWN, 711: E.BEHAVIOR_TIMEOUT, 712: E.BEHAVIOR_TF_ERROR,
+                  713: E.INVALID_INPUT, 714: E.COLLISION_AHEAD, 720: E.BEHAVIOR_UNKNOWN,
+                  721: E.BEHAVIOR_TIMEOUT, 722: E.BEHAVIOR_TF_ERROR, 723: E.COLLISION_AHEAD,
+                  724: E.INVALID_INPUT, 740: E.BEHAVIOR_UNKNOWN, 741: E.BEHAVIOR_TIMEOUT}
+
+
+def error_code_of(kind: str, value: int) -> NavErrorCode:
+    if value in BEHAVIOR_CODES:
+        return BEHAVIOR_CODES[value]
+    try:
+        return NavErrorCode(value)
+    except ValueError:
+        return UNKNOWN_CODE[kind]
+
+
+def path_of(msg: idl.Path, stamp: float) -> Path:
+    pts = np.array([[p.pose.position.x, p.pose.position.y, yaw_of(p.pose.orientation)] for p in msg.poses],
+                   dtype=float).reshape(-1, 3)
+    return Path(stamp, pts)
+
