@@ -60,15 +60,27 @@ def _type_mismatch(key: str, previous: PortType, current: PortType) -> LogicErro
 
 
 class Blackboard:
-    """A scoped key -> Entry map with a parent, subtree remappings and optional autoremap."""
+    """A scoped key -> Entry map with a parent, subtree remappings and optional autoremap.
 
-    __slots__ = ("_storage", "parent", "_remapping", "autoremap", "__weakref__")
+    A key found through remapping or autoremap is remembered per blackboard, so a SubTree
+    three levels deep does not walk the chain on every read. Anything that could change what
+    a chain resolves to (a removed entry, an entry added by cloning, a new remapping) bumps
+    the class-wide ``_generation``, which empties every such memory on its next use."""
+
+    __slots__ = ("_storage", "parent", "_remapping", "autoremap", "_resolved", "_resolved_gen", "__weakref__")
+    _generation = 0
 
     def __init__(self, parent: Blackboard | None = None):
         self._storage: dict[str, Entry] = {}
         self.parent = parent
         self._remapping: dict[str, str] = {}
         self.autoremap = False
+        self._resolved: dict[str, Entry] = {}
+        self._resolved_gen = Blackboard._generation
+
+    @staticmethod
+    def _structure_changed() -> None:
+        Blackboard._generation += 1
 
     @classmethod
     def create(cls, parent: Blackboard | None = None) -> Blackboard:
@@ -83,9 +95,11 @@ class Blackboard:
 
     def add_subtree_remapping(self, internal: str, external: str) -> None:
         self._remapping[internal] = external
+        self._structure_changed()
 
     def enable_auto_remapping(self, enabled: bool = True) -> None:
         self.autoremap = enabled
+        self._structure_changed()
 
     @property
     def remappings(self) -> dict[str, str]:
@@ -94,19 +108,30 @@ class Blackboard:
     # -- lookup --------------------------------------------------------------------------------
     def get_entry(self, key: str) -> Entry | None:
         """Resolve ``key`` through '@', the local map, remappings and autoremap (spec 8.2)."""
-        if key[:1] == "@":
-            return self.root().get_entry(key[1:])
-        entry = self._storage.get(key)
+        entry = self._storage.get(key)  # local keys never start with '@'
         if entry is not None:
             return entry
+        if key[:1] == "@":
+            return self.root().get_entry(key[1:])
         parent = self.parent
-        if parent is not None:
-            ext = self._remapping.get(key)
-            if ext is not None:
-                return parent.get_entry(ext)
-            if self.autoremap and key[:1] != "_":
-                return parent.get_entry(key)
-        return None
+        if parent is None:
+            return None
+        resolved = self._resolved
+        if self._resolved_gen != Blackboard._generation:
+            resolved.clear()
+            self._resolved_gen = Blackboard._generation
+        else:
+            entry = resolved.get(key)
+            if entry is not None:
+                return entry
+        ext = self._remapping.get(key)
+        if ext is not None:
+            entry = parent.get_entry(ext)
+        elif self.autoremap and key[:1] != "_":
+            entry = parent.get_entry(key)
+        if entry is not None:
+            resolved[key] = entry
+        return entry
 
     def __contains__(self, key: str) -> bool:
         return self.get_entry(key) is not None
@@ -215,7 +240,8 @@ class Blackboard:
 
     def unset(self, key: str) -> None:
         """Remove a *local* key (no '@', no remapping); nothing happens if it is absent."""
-        self._storage.pop(key, None)
+        if self._storage.pop(key, None) is not None:
+            self._structure_changed()
 
     # -- reading -------------------------------------------------------------------------------
     def get(self, key: str, type_: PortType | type | None = None, default: Any = EMPTY) -> Any:
@@ -243,6 +269,7 @@ class Blackboard:
 
     def clone_into(self, dst: Blackboard) -> None:
         """Copy every local entry into ``dst``; keys of dst not in self are removed."""
+        self._structure_changed()
         for key in list(dst._storage):
             if key not in self._storage:
                 del dst._storage[key]

@@ -20,20 +20,23 @@ class AlwaysFailureNode(SyncActionNode):
 
 
 class _ScriptHolder:
-    """Compile the ``code`` port once; recompile only if its text changes."""
+    """Compile the ``code`` port once; recompile only if its text changes.
+
+    A literal ``code`` (the usual case) cannot change, so it is never read again after the
+    first compile; only code taken from a blackboard entry is re-read on every tick."""
 
     _kind = "Script"
 
     def _init_script(self) -> None:
         self._code_text: str | None = None
         self._script = None
-        if "code" not in self.config.input_ports:
+        raw = self.config.input_ports.get("code")
+        if raw is None:
             raise LogicError(f"Missing port [code] in {self._kind}")
+        self._code_from_blackboard = isinstance(raw, str) and blackboard_key(raw, "code") is not None
         self._load()
 
     def _load(self) -> None:
-        from ..script import compile_script
-
         try:
             text = self.get_input("code")
         except BTRuntimeError:
@@ -41,6 +44,8 @@ class _ScriptHolder:
         if not isinstance(text, str):
             raise BTRuntimeError(f"The port [code] of {self._kind} must contain a string")
         if text != self._code_text:
+            from ..script import compile_script
+
             self._script = compile_script(text)
             self._code_text = text
 
@@ -59,7 +64,8 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
         self._init_script()
 
     def tick(self) -> NodeStatus:
-        self._load()
+        if self._code_from_blackboard:
+            self._load()
         self._script.run(self.config.blackboard, self.config.enums)
         return SUCCESS
 
@@ -79,7 +85,8 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
         self._init_script()
 
     def tick(self) -> NodeStatus:
-        self._load()
+        if self._code_from_blackboard:
+            self._load()
         cfg = self.config
         return SUCCESS if self._script.run_bool(cfg.blackboard, cfg.enums) else FAILURE
 

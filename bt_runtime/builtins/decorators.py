@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..errors import BTRuntimeError, LogicError, NodeExecutionError
 from ..node import DecoratorNode, NodeConfig, _is_execute_tick, _wrap_error, tick_cell
-from ..ports import BOOL, PortInfo, input_port
+from ..ports import BOOL, PortInfo, blackboard_key, input_port
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType, PortDirection
 
 
@@ -228,21 +228,25 @@ class PreconditionNode(DecoratorNode):
         self._script = None
         self._children_running = False
         super().__init__(name, config)
+        raw = self.config.input_ports.get("if")
+        # a literal script cannot change: compile it once (only {key} scripts are re-read)
+        self._if_from_blackboard = isinstance(raw, str) and blackboard_key(raw, "if") is not None
         self._load()
 
     def _load(self) -> None:
-        from ..script import compile_script
-
         try:
             text = self.get_input("if")
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [if] in Precondition") from None
         if text != self._script_text:
+            from ..script import compile_script
+
             self._script = compile_script(text)
             self._script_text = text
 
     def tick(self) -> NodeStatus:
-        self._load()
+        if self._if_from_blackboard:
+            self._load()
         try:
             else_status = self.get_input("else")
         except BTRuntimeError:
