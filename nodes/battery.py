@@ -12,9 +12,9 @@ import math
 
 from bt_runtime import ConditionNode, NodeStatus, SyncActionNode
 from bt_runtime.ports import input_port, output_port
-from bt_runtime.runtime.messages import BatteryState, Path, Pose2D
+from bt_runtime.runtime.messages import BatteryState, Path, Pose2D, wrap_angle
 
-from .collision import latest_pose
+from .robot import robot_pose
 from .types import PATH, POSE
 
 SUCCESS, FAILURE = NodeStatus.SUCCESS, NodeStatus.FAILURE
@@ -34,7 +34,7 @@ def path_turning(points, start_yaw: float) -> float:
         if x0 == x1 and y0 == y1:
             continue
         heading = math.atan2(y1 - y0, x1 - x0)
-        total += abs((heading - yaw + math.pi) % (2 * math.pi) - math.pi)
+        total += abs(wrap_angle(heading - yaw))
         yaw = heading
     return total
 
@@ -57,7 +57,7 @@ class BatteryCanReach(ConditionNode):
     def tick(self):
         ctx = self.context
         battery = ctx.backup.latest("battery")
-        pose = latest_pose(ctx)
+        pose = robot_pose(self)
         if not isinstance(battery, BatteryState) or pose is None or not math.isfinite(battery.percentage):
             return FAILURE  # unknown charge or position: cannot promise anything
         goal: Pose2D = self.get_input("goal")

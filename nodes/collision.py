@@ -13,16 +13,12 @@ import math
 
 from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActionNode, SyncActionNode
 from bt_runtime.ports import input_port, output_port
-from bt_runtime.runtime.messages import Contact, Imu, Pose2D
+from bt_runtime.runtime.messages import Contact, Imu, Pose2D, wrap_angle
 
-from .types import POSE, wrap_angle
+from .robot import robot_pose
+from .types import POSE
 
 SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
-
-
-def latest_pose(context) -> Pose2D | None:
-    msg = context.backup.latest("pose")
-    return msg.pose if msg is not None else None
 
 
 class ImpactDetector:
@@ -115,7 +111,7 @@ class EstimateContactPoint(SyncActionNode):
     def tick(self):
         ctx = self.context
         contact = ctx.backup.latest("bumper")
-        pose = latest_pose(ctx)
+        pose = robot_pose(self)
         if pose is None:
             return FAILURE
         bearing = self.get_input("direction", 0.0)

@@ -11,9 +11,9 @@ import math
 
 from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus
 from bt_runtime.ports import input_port, output_port
-from bt_runtime.runtime.messages import NavErrorCode, Path, Pose2D
+from bt_runtime.runtime.messages import NavErrorCode, Path, Pose2D, wrap_angle
 
-from .collision import latest_pose
+from .robot import robot_pose
 from .types import PATH, POSE
 
 SUCCESS, FAILURE = NodeStatus.SUCCESS, NodeStatus.FAILURE
@@ -32,7 +32,7 @@ class RatePathQuality(ConditionNode):
     def tick(self):
         nav = self.context.navigation
         path: Path | None = self.get_input("path", None)
-        pose = latest_pose(self.context)
+        pose = robot_pose(self)
         if path is None or len(path) < 2 or pose is None:
             self.set_output("quality", 0.0)
             return FAILURE
@@ -56,7 +56,7 @@ def ring_candidates(goal: Pose2D, robot: Pose2D | None, max_radius: float, step:
     for i in range(1, rings + 1):
         r = i * step
         angles = [toward + 2 * math.pi * k / directions for k in range(directions)]
-        angles.sort(key=lambda a: abs((a - toward + math.pi) % (2 * math.pi) - math.pi))
+        angles.sort(key=lambda a: abs(wrap_angle(a - toward)))
         for a in angles:
             x, y = goal.x + r * math.cos(a), goal.y + r * math.sin(a)
             out.append(Pose2D(x, y, math.atan2(goal.y - y, goal.x - x)))
@@ -78,7 +78,7 @@ class FindAlternativeGoal(AsyncActionNode):
     async def run(self):
         nav = self.context.navigation
         goal: Pose2D = self.get_input("goal")
-        candidates = ring_candidates(goal, latest_pose(self.context), self.get_input("max_radius"),
+        candidates = ring_candidates(goal, robot_pose(self), self.get_input("max_radius"),
                                      self.get_input("step"), self.get_input("directions"))
         tried = 0
         for candidate in candidates:

@@ -12,12 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bt_runtime.runtime.messages import wrap_angle as wrap_angle  # the one definition, re-exported here
+
 TWO_PI = 2.0 * math.pi
-
-
-def wrap_angle(a: float) -> float:
-    """Wrap to [-pi, pi)."""
-    return (a + math.pi) % TWO_PI - math.pi
 
 
 def polygon_area(points: np.ndarray) -> float:

@@ -15,6 +15,17 @@ from enum import Enum, IntEnum
 import numpy as np
 
 
+def wrap_angle(angle):
+    """``angle`` (a float or a numpy array) wrapped to [-pi, pi): the one convention for yaw
+    differences, shared by the nodes and the simulator."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def yaw_from_quaternion(qx: float, qy: float, qz: float, qw: float) -> float:
+    """The yaw (rotation about z) of a quaternion, as ROS's tf2 getYaw computes it."""
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
 @dataclass(slots=True, frozen=True)
 class Pose2D:
     x: float

@@ -29,22 +29,11 @@ import numpy as np
 from bt_runtime.errors import LogicError
 from bt_runtime.node import NodeConfig, StatefulActionNode, SyncActionNode
 from bt_runtime.ports import BOOL, DOUBLE, INT, STRING, input_port, output_port
-from bt_runtime.runtime.messages import ActionStatus, NavErrorCode, NavResult, Path, Pose2D
+from bt_runtime.runtime.messages import ActionStatus, NavErrorCode, NavResult, Path, Pose2D, wrap_angle
 from bt_runtime.status import FAILURE, RUNNING, SUCCESS, NodeStatus
 
-from .common import (
-    closest_index,
-    increment_recovery_count,
-    is_empty,
-    log,
-    navigation,
-    points_of,
-    robot_pose,
-    same_path,
-    server_timeout,
-    wrap_angle,
-)
-from .types import (
+from ..robot import navigation, robot_pose
+from ..types import (
     ERROR_CODE,
     GOALS,
     PATH,
@@ -54,6 +43,15 @@ from .types import (
     TRACKING_FEEDBACK,
     TrackingFeedback,
     empty_path,
+)
+from .common import (
+    closest_index,
+    increment_recovery_count,
+    is_empty,
+    log,
+    points_of,
+    same_path,
+    server_timeout,
 )
 
 NONE = 0

@@ -1,10 +1,8 @@
-"""What several Nav2-named nodes share: the robot pose, ``getInputOrBlackboard``, path
-geometry (``nav2_util::geometry_utils``), the recovery counter and Nav2's "topics".
+"""What several Nav2-named nodes share: ``getInputOrBlackboard``, path geometry
+(``nav2_util::geometry_utils``), the recovery counter and Nav2's "topics".
 
-Nodes reach the robot through ``node.context`` (``bt_runtime.runtime.context.RuntimeContext``
-or any object with the same attributes): ``context.backup.latest("pose")`` stands for Nav2's
-TF lookup map -> base_link, ``"odom"`` for the odometry subscription, ``"battery"`` for
-``/battery_status``; ``context.navigation`` is the Nav2-like action/service client.
+The robot itself (pose, latest messages, the navigation client) is read through
+``nodes/robot.py``, as every node of the library does.
 """
 
 from __future__ import annotations
@@ -16,60 +14,20 @@ from typing import Any
 import numpy as np
 import structlog
 
-from bt_runtime.errors import BTRuntimeError, LogicError
-from bt_runtime.runtime.messages import LocalizedPose, Path, Pose2D
+from bt_runtime.errors import BTRuntimeError
+from bt_runtime.runtime.messages import Path, Pose2D, wrap_angle
 
 log = structlog.get_logger("nodes.nav2")
 
-# A pose older than this counts as "transform not available" (Nav2: getCurrentPose fails when
-# the map -> base_link transform is older than transform_tolerance; our localization publishes
-# at 10 Hz and the stand-in navigation stack gives up after 1 s without a pose).
-POSE_TIMEOUT = 1.0
 # bt_navigator's default_server_timeout (ms): how long a service node waits for its response.
 DEFAULT_SERVER_TIMEOUT_MS = 20
 
 _MISSING = object()
 
 
-def wrap_angle(angle: float) -> float:
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
-
-
 # ---------------------------------------------------------------------------------------------
-# Context access
+# Ports and blackboard
 # ---------------------------------------------------------------------------------------------
-
-def navigation(node: Any) -> Any:
-    """The Nav2-like client (``context.navigation``); a clear error if the tree has none."""
-    ctx = node.context
-    nav = getattr(ctx, "navigation", None) if ctx is not None else None
-    if nav is None:
-        raise LogicError(f"node '{node.config.path}' [{node.registration_name}] needs a runtime context "
-                             "with a navigation client (context.navigation); create the factory with "
-                             "the runtime's context")
-    return nav
-
-
-def latest(node: Any, stream: str) -> Any:
-    ctx = node.context
-    backup = getattr(ctx, "backup", None) if ctx is not None else None
-    return backup.latest(stream) if backup is not None else None
-
-
-def robot_pose(node: Any, max_age: float = POSE_TIMEOUT) -> Pose2D | None:
-    """The robot's map-frame pose, or None when localization is missing or stale."""
-    ctx = node.context
-    backup = getattr(ctx, "backup", None) if ctx is not None else None
-    if backup is None:
-        return None
-    msg = backup.latest("pose")
-    if msg is None:
-        return None
-    age = backup.age("pose") if hasattr(backup, "age") else None
-    if age is not None and age > max_age:
-        return None
-    return msg.pose if isinstance(msg, LocalizedPose) else getattr(msg, "pose", msg)
-
 
 def input_or_blackboard(node: Any, name: str, default: Any = None) -> Any:
     """BT.CPP/Nav2 ``getInputOrBlackboard``: the port if the XML (or a default) gives it, else
@@ -209,7 +167,7 @@ def closest_index(pts: np.ndarray, pose: Pose2D, begin: int = 0, end: int | None
         return begin
     d2 = (seg[:, 0] - pose.x) ** 2 + (seg[:, 1] - pose.y) ** 2
     if angular_weight and seg.shape[1] >= 3:
-        da = np.abs((seg[:, 2] - pose.yaw + np.pi) % (2 * np.pi) - np.pi) * angular_weight
+        da = np.abs(wrap_angle(seg[:, 2] - pose.yaw)) * angular_weight
         d2 = d2 + da * da
     return begin + int(np.argmin(d2))
 

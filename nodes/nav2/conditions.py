@@ -12,21 +12,19 @@ from bt_runtime.node import ConditionNode, NodeConfig
 from bt_runtime.ports import BOOL, DOUBLE, STRING, input_port
 from bt_runtime.status import FAILURE, IDLE, SUCCESS, NodeStatus
 
+from ..robot import latest, navigation, robot_pose
+from ..types import ERROR_CODE, GOALS, INT_LIST, PATH, POSE, SERVER_TIMEOUT, TRACKING_FEEDBACK
 from .common import (
     closest_index,
     first_after_integrated_distance,
     input_or_blackboard,
     is_empty,
-    latest,
-    navigation,
     path_length,
     points_of,
     remember_goals,
-    robot_pose,
     same_path,
     server_timeout,
 )
-from .types import ERROR_CODE, GOALS, INT_LIST, PATH, POSE, SERVER_TIMEOUT, TRACKING_FEEDBACK
 
 _STATUS = {True: SUCCESS, False: FAILURE}
 

@@ -15,8 +15,9 @@ from bt_runtime.node import DecoratorNode, NodeConfig
 from bt_runtime.ports import DOUBLE, STRING, input_port, output_port
 from bt_runtime.status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
-from .common import input_or_blackboard, nav2_topics, path_length, points_of, remember_goals, robot_pose
-from .types import GOALS, PATH, POSE
+from ..robot import robot_pose
+from ..types import GOALS, PATH, POSE
+from .common import input_or_blackboard, nav2_topics, path_length, points_of, remember_goals
 
 
 def _tick_child(node: DecoratorNode) -> NodeStatus:

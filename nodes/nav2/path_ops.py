@@ -14,15 +14,10 @@ from bt_runtime.ports import DOUBLE, INT, STRING, input_port, output_port
 from bt_runtime.runtime.messages import Path, Pose2D
 from bt_runtime.status import FAILURE, RUNNING, SUCCESS, NodeStatus
 
+from ..robot import robot_pose
+from ..types import GOALS, PATH, POSE, WAYPOINT_STATUSES, WaypointStatusCode, empty_path
 from .actions import safe_set_output
-from .common import (
-    closest_index,
-    first_after_integrated_distance,
-    points_of,
-    robot_pose,
-    same_path,
-)
-from .types import GOALS, PATH, POSE, WAYPOINT_STATUSES, WaypointStatusCode, empty_path
+from .common import closest_index, first_after_integrated_distance, points_of, same_path
 
 
 def _with_points(path: Any, pts: np.ndarray) -> Path:

@@ -14,9 +14,9 @@ from bt_runtime.node import StatefulActionNode
 from bt_runtime.ports import BOOL, DOUBLE, FLOAT, STRING, input_port, output_port
 from bt_runtime.status import FAILURE, SUCCESS, NodeStatus
 
+from ..types import DURATION, ERROR_CODE, GOALS, PATH, POSE, ROUTE
 from .actions import error_ports, safe_set_output, server_ports
 from .common import log
-from .types import DURATION, ERROR_CODE, GOALS, PATH, POSE, ROUTE
 
 _warned: set[str] = set()
 

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from bt_runtime.runtime.messages import Pose2D, Twist
+from bt_runtime.runtime.messages import Pose2D, Twist, wrap_angle
 
 from .costmap import FREE_SPACE, NO_INFORMATION, LocalCostmap
 from .params import ControllerParams, RobotParams
@@ -29,10 +29,6 @@ from .params import ControllerParams, RobotParams
 
 class NoValidControl(Exception):
     """RPP found no safe command this cycle (Nav2's nav2_core::NoValidControl)."""
-
-
-def normalize_angle(a: float) -> float:
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 class GoalChecker:
@@ -63,7 +59,7 @@ class GoalChecker:
     def is_goal_reached(self, pose: Pose2D, goal: Pose2D, remaining_path: float) -> bool:
         if not self.is_xy_reached(pose, goal, remaining_path):
             return False
-        return abs(normalize_angle(goal.yaw - pose.yaw)) <= self.yaw_tolerance
+        return abs(wrap_angle(goal.yaw - pose.yaw)) <= self.yaw_tolerance
 
 
 class ProgressChecker:
@@ -196,7 +192,7 @@ class RegulatedPurePursuit:
         linear = self.max_linear_vel
         if p.use_rotate_to_heading and goal_checker.is_xy_reached(pose, goal, remaining):
             self.is_rotating_to_heading = True
-            linear, angular = self._rotate(normalize_angle(goal.yaw - yaw), speed)
+            linear, angular = self._rotate(wrap_angle(goal.yaw - yaw), speed)
         elif p.use_rotate_to_heading and abs(math.atan2(cy, cx)) > p.rotate_to_heading_min_angle:
             self.is_rotating_to_heading = True
             linear, angular = self._rotate(math.atan2(cy, cx), speed)

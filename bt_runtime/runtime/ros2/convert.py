@@ -22,6 +22,7 @@ from ..messages import (
     Path,
     Pose2D,
     Twist,
+    yaw_from_quaternion,
 )
 from . import idl
 from .config import Ros2Config
@@ -30,7 +31,7 @@ E = NavErrorCode
 
 
 def yaw_of(q: idl.Quaternion) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    return yaw_from_quaternion(q.x, q.y, q.z, q.w)
 
 
 def quaternion_of(yaw: float) -> idl.Quaternion:

@@ -14,7 +14,7 @@ from bt_runtime.runtime.clock import run
 from bt_runtime.runtime.messages import ActionStatus, NavResult, Path, Pose2D
 from bt_runtime.status import FAILURE, IDLE, RUNNING, SUCCESS
 from nodes.nav2 import publish
-from nodes.nav2.types import parse_goals, parse_path, parse_pose
+from nodes.types import parse_goals, parse_path, parse_pose
 from tests.nodes.nav2.support import FakeHandle, build, fake_context
 
 A, C = ActionStatus.ABORTED, ActionStatus.CANCELED

@@ -7,7 +7,7 @@ import pytest
 
 from bt_runtime.runtime.messages import Path, Pose2D
 from bt_runtime.status import FAILURE, RUNNING, SUCCESS
-from nodes.nav2.types import TrackingFeedback
+from nodes.types import TrackingFeedback
 from tests.nodes.nav2.support import Counter, build, fake_context
 
 
