@@ -1,35 +1,30 @@
-"""The scenario campaign: every scenario, both modes, many seeded runs, in parallel processes.
+"""The scenario campaign: every scenario, both modes, many seeded runs, on a backend.
 
 Produces the paper's Table IV (runs, % successful without and with the autonomy layer, and
 the paper's figures), a JSON file with every run and its verdicts, and on request a PNG
 report per scenario. Runs are independent and reproducible from (base seed, run index).
+The plan is a list of self-contained run specs (runspec.py) that a backend executes
+(backends.py: a local process pool; ray_backend.py: Ray), streamed to a results file
+(results.py) that a later campaign resumes and that ``scenarios merge`` combines.
 """
 
 from __future__ import annotations
 
 import collections
-import multiprocessing
-import os
 import re
-import sys
 import time
-from collections.abc import Callable, Iterable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from .runner import MODES, run_scenario, scenario_seed
-from .spec import ScenarioSpec, load_scenario
+from .backends import Backend
+from .progress import Progress
+from .results import Recorded, ResultsError
+from .runner import MODES
+from .runspec import RunSpec
+from .spec import ScenarioSpec
 
 _NUMBER = re.compile(r"-?\d+(\.\d+)?")
-
-
-@dataclass(frozen=True)
-class Task:
-    scenario: str
-    mode: str
-    run: int
-    seed: int
 
 
 @dataclass
@@ -38,7 +33,11 @@ class CampaignResult:
     results: list[dict[str, Any]]
     wall_time: float
     jobs: int
+    """CPUs the runs were spread over"""
     trajectories: dict[tuple[str, str, int], Any] = field(default_factory=dict)
+    backend: str = "local"
+    resumed: int = 0
+    """runs taken from the results file of an interrupted campaign, not run again"""
 
     def by_scenario(self) -> dict[str, dict[str, list[dict[str, Any]]]]:
         table: dict[str, dict[str, list[dict[str, Any]]]] = {n: {m: [] for m in MODES} for n in self.specs}
@@ -67,10 +66,11 @@ class CampaignResult:
                           "failure_reasons": failure_reasons(runs), "results": runs}
                    for mode, runs in modes.items()},
             }
+        run_wall = sum(r["wall_time"] for r in self.results)
         return {"meta": {"wall_time_s": round(self.wall_time, 2), "jobs": self.jobs, "runs": len(self.results),
+                         "backend": self.backend, "resumed_runs": self.resumed,
                          "sim_time_s": round(self.sim_time, 1),
-                         "mean_real_time_factor": round(self.sim_time / (self.wall_time * self.jobs), 1)
-                         if self.wall_time else None},
+                         "mean_real_time_factor": round(self.sim_time / run_wall, 1) if run_wall else None},
                 "scenarios": scenarios}
 
 
@@ -84,98 +84,51 @@ def failure_reasons(runs: list[dict[str, Any]]) -> dict[str, int]:
     return dict(counter.most_common())
 
 
-def plan(names: Iterable[str], runs: int | None, seed: int, modes: Iterable[str] = MODES) -> list[Task]:
-    """``runs`` per scenario and mode, or the paper's number of runs when None."""
-    tasks = []
-    for name in names:
-        spec = load_scenario(name)
-        n = spec.paper.runs if runs is None else runs
-        for mode in modes:
-            for i in range(n):
-                tasks.append(Task(name, mode, i, scenario_seed(seed, i)))
-    return tasks
-
-
-def _run_task(task: Task, keep_trajectory: bool) -> tuple[dict[str, Any], Any]:
-    from bt_runtime.logging_setup import quiet_logging
-
-    quiet_logging("critical")
-    result = run_scenario(task.scenario, task.mode, task.seed, keep_record=keep_trajectory)
-    out = result.to_dict()
-    out["run"] = task.run
-    traj = None
-    if keep_trajectory and result.record is not None:
-        rec = result.record
-        traj = {"trajectory": rec.trajectory[:, :3].copy(),
-                "marks": [(r.goal.x, r.goal.y) for r in rec.nav_requests if r.method == "add_obstacle"],
-                "faults": [(f.t, f.kind) for f in rec.fault_log],
-                "collisions": [tuple(map(float, e.data["point"])) for e in rec.sim_events
-                               if e.kind == "collision" and e.data.get("point") is not None],
-                "goals": [(g.pose.x, g.pose.y) for g in rec.goals]}
-    return out, traj
-
-
-class Progress:
-    """A one-line progress bar on a terminal (a line every 10 % otherwise)."""
-
-    def __init__(self, total: int, stream=sys.stderr):
-        self.total = total
-        self.stream = stream
-        self.done = 0
-        self.ok = 0
-        self.t0 = time.perf_counter()
-        self.tty = hasattr(stream, "isatty") and stream.isatty()
-        self._last_decile = -1
-
-    def update(self, success: bool) -> None:
-        self.done += 1
-        self.ok += int(success)
-        elapsed = time.perf_counter() - self.t0
-        eta = elapsed / self.done * (self.total - self.done)
-        width = 30
-        filled = int(width * self.done / self.total)
-        line = (f"[{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} runs  "
-                f"{self.ok} ok  {elapsed:5.1f} s  eta {eta:5.1f} s")
-        if self.tty:
-            self.stream.write("\r" + line)
-            if self.done == self.total:
-                self.stream.write("\n")
-            self.stream.flush()
-        elif self.done * 10 // self.total != self._last_decile:
-            self._last_decile = self.done * 10 // self.total
-            self.stream.write(line + "\n")
-            self.stream.flush()
-
-
-def run_campaign(names: list[str], *, runs: int | None, seed: int = 0, jobs: int | None = None,
-                 keep_trajectories: bool = False, modes: Iterable[str] = MODES,
+def run_campaign(runs: Sequence[RunSpec], backend: Backend, *, specs: Sequence[ScenarioSpec] | None = None,
+                 recorded: Mapping[str, dict[str, Any]] | None = None,
                  on_result: Callable[[dict[str, Any]], Any] | None = None) -> CampaignResult:
-    specs = {n: load_scenario(n) for n in names}
-    tasks = plan(names, runs, seed, modes)
-    jobs = jobs or os.cpu_count() or 1
-    t0 = time.perf_counter()
-    results: list[dict[str, Any]] = []
+    """Execute the planned runs on the backend, skipping those already ``recorded`` (a resumed
+    campaign: their recorded results count instead), each counted exactly once.
+
+    ``on_result`` sees every new result line as it arrives (to stream it to a file and move
+    the progress bar); the returned result holds the runs in plan order.
+    """
+    recorded = recorded or {}
+    spec_list = list(specs) if specs is not None else list({r.scenario.name: r.scenario for r in runs}.values())
+    planned = {r.key: i for i, r in enumerate(runs)}
+    results = {key: recorded[key] for key in planned if key in recorded}
+    todo = [r for r in runs if r.key not in results]
     trajectories: dict[tuple[str, str, int], Any] = {}
-
-    def collect(task: Task, out: dict[str, Any], traj: Any) -> None:
-        results.append(out)
-        if traj is not None:
-            trajectories[(task.scenario, task.mode, task.run)] = traj
+    t0 = time.perf_counter()
+    for line, artifacts in backend.run(todo):
+        key = line["key"]
+        if key in results or key not in planned:
+            continue  # a duplicate delivery (or a stray) is never counted twice
+        paths = {name: value for name, value in artifacts.items() if isinstance(value, str)}
+        if paths:
+            line["artifacts"] = paths
+        if artifacts.get("trajectory") is not None:
+            trajectories[(line["scenario"], line["mode"], line["run"])] = artifacts["trajectory"]
+        results[key] = line
         if on_result is not None:
-            on_result(out)
+            on_result(line)
+    missing = [key for key in planned if key not in results]
+    if missing:
+        raise RuntimeError(f"{len(missing)} run(s) never reported a result, e.g. {', '.join(missing[:3])}")
+    ordered = sorted(results.values(), key=lambda r: planned[r["key"]])
+    return CampaignResult({s.name: s for s in spec_list}, ordered, time.perf_counter() - t0, backend.cpus,
+                          trajectories, backend=backend.name, resumed=len(runs) - len(todo))
 
-    if jobs <= 1:
-        for task in tasks:
-            collect(task, *_run_task(task, keep_trajectories))
-    else:
-        ctx = multiprocessing.get_context("fork" if sys.platform.startswith("linux") else "spawn")
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-            futures = {pool.submit(_run_task, t, keep_trajectories): t for t in tasks}
-            for future in as_completed(futures):
-                collect(futures[future], *future.result())
-    order = {(t.scenario, t.mode, t.run): i for i, t in enumerate(tasks)}
-    results.sort(key=lambda r: order[(r["scenario"], r["mode"], r["run"])])
-    return CampaignResult(specs, results, time.perf_counter() - t0, jobs, trajectories)
+
+def from_recorded(recorded: Recorded) -> CampaignResult:
+    """A campaign's result from result files alone (``scenarios merge``): no wall time."""
+    modes = {m: i for i, m in enumerate(MODES)}
+    order = {name: i for i, name in enumerate(recorded.specs)}
+    unknown = sorted({r["scenario"] for r in recorded.runs.values()} - set(order))
+    if unknown:
+        raise ResultsError(f"runs of {', '.join(unknown)} but no scenario record for them in the files")
+    runs = sorted(recorded.runs.values(), key=lambda r: (order[r["scenario"]], modes.get(r["mode"], 9), r["run"]))
+    return CampaignResult(dict(recorded.specs), runs, 0.0, 0, backend="merge")
 
 
 def format_table(result: CampaignResult) -> str:
@@ -207,3 +160,7 @@ def format_failures(result: CampaignResult) -> str:
                 top = "; ".join(f"{k} (x{v})" for k, v in list(reasons.items())[:2])
                 lines.append(f"  {name:<15}{mode:<8} {top}")
     return "\n".join(lines)
+
+
+__all__ = ["CampaignResult", "Progress", "failure_reasons", "format_failures", "format_table", "from_recorded",
+           "run_campaign"]

@@ -1,0 +1,74 @@
+"""The Ray backend: every run a Ray task on a local Ray with 2 CPUs. Same seeds and verdicts as
+the local backend, run by run; a worker that dies is retried and its run counted once; and the
+local Ray leaves no process behind."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from sim.scenarios.backends import LocalBackend
+from sim.scenarios.campaign import run_campaign
+from sim.scenarios.runspec import plan_runs
+from sim.scenarios.spec import load_scenario
+
+from .campaign_support import by_key, cheap_plan
+
+pytest.importorskip("ray")
+
+
+def _descendants(pid: int) -> set[int]:
+    children: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if fields[0] != "Z":
+            children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    out, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            out.add(child)
+            todo.append(child)
+    return out
+
+
+@pytest.fixture(scope="module")
+def ray_backend():
+    from sim.scenarios.ray_backend import RayBackend
+
+    backend = RayBackend(num_cpus=2)
+    started = _descendants(os.getpid())
+    yield backend
+    backend.close()
+    deadline = time.monotonic() + 15
+    while (left := started & _descendants(os.getpid())) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not left, f"Ray processes left after shutdown: {sorted(left)}"
+
+
+def test_ray_backend_reports_the_local_rays_cpus(ray_backend):
+    assert ray_backend.cpus == 2
+
+
+def test_ray_gives_the_same_runs_as_local(ray_backend):
+    plan = cheap_plan(runs=2) + plan_runs([load_scenario("Lidar_1")], 1, 5, ("with",))
+    local = run_campaign(plan, LocalBackend(jobs=1))
+    on_ray = run_campaign(plan, ray_backend)
+    assert on_ray.backend == "ray"
+    assert [r["key"] for r in on_ray.results] == [r.key for r in plan]  # each once, in plan order
+    assert by_key(on_ray.results) == by_key(local.results)
+    assert any(r["success"] for r in on_ray.results) and not all(r["success"] for r in on_ray.results)
+
+
+def test_a_dying_worker_is_retried_and_its_run_counted_once(ray_backend, tmp_path):
+    maker = "tests.scenarios.worker_faults:die_once"
+    plan = cheap_plan(runs=1, artifacts={maker: {"marker_dir": str(tmp_path)}})
+    result = run_campaign(plan, ray_backend)
+    assert [r["key"] for r in result.results] == [r.key for r in plan]
+    assert all(r["artifacts"] == {maker: "survived a retry"} for r in result.results)
+    assert len(list(tmp_path.iterdir())) == len(plan)  # every run's first worker died
