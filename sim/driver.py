@@ -77,6 +77,9 @@ class SimDriver:
     def send_velocity(self, linear: float, angular: float) -> None:
         self.sim.command(linear, angular)
 
+    def emergency_zero(self) -> None:
+        self.sim.emergency_zero()
+
     # Localization (AMCL-like) needs the odometry transform: restart odometry first.
     DEPENDENCIES = {"localization": ("odom",)}
 
@@ -96,6 +99,7 @@ class SimDriver:
         profile = self.sim.profile
         battery = profile.battery
         return RobotInfo(radius=profile.radius, max_linear=profile.max_linear, max_angular=profile.max_angular,
+                         max_linear_accel=profile.max_linear_accel, max_angular_accel=profile.max_angular_accel,
                          capacity_ah=battery.capacity_ah,
                          voltage_nominal=(battery.voltage_full + battery.voltage_empty) / 2,
                          idle_power_w=battery.idle_power_w, k_linear=battery.k_linear,

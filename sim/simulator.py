@@ -350,6 +350,16 @@ class Simulator:
 
     send_velocity = command  # the RobotDriver protocol's name
 
+    def emergency_zero(self) -> None:
+        """Zero the base command from any thread (the runtime's off-loop watchdog): the base
+        ramps down from its next physics step; ``cmd_vel_out`` is published on the loop."""
+        loop = self._loop
+        now = loop.time() if loop is not None else 0.0  # a real loop's clock is time.monotonic
+        self.base.command(0.0, 0.0, now)
+        if loop is not None and not loop.is_closed():
+            with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
+                loop.call_soon_threadsafe(self.bus.publish, "cmd_vel_out", Twist(0.0, 0.0))
+
     def _battery_depleted(self) -> None:
         self.base.enabled = False
         self._event("battery_depleted")

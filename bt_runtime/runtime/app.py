@@ -28,12 +28,15 @@ from ..status import FAILURE, SUCCESS, NodeStatus
 from ..tree import Tree
 from .backup import DataBackup
 from .clock import is_virtual
+from .command_limits import MotionLimits
 from .config import RuntimeConfig
 from .context import RuntimeContext
 from .driver import RobotDriver
 from .gate import DecisionGate
+from .messages import RobotInfo
 from .supervisor import SystemSupervisor
 from .tick_loop import TickLoop
+from .watchdog import LoopWatchdog
 
 log = structlog.get_logger("bt_runtime.runtime")
 
@@ -78,14 +81,15 @@ class AutonomyRuntime:
         clock = self.loop.time
         self.clock = clock
         cfg = self.config
+        robot_info = getattr(driver, "robot_info", None)
+        robot = robot_info() if callable(robot_info) else RobotInfo()
         self.backup = DataBackup(driver, cfg.backup, clock=clock)
-        self.gate = DecisionGate(driver, cfg.gate, clock=clock, backup=self.backup)
+        self.gate = DecisionGate(driver, cfg.gate, clock=clock, backup=self.backup,
+                                 limits=MotionLimits.from_robot(robot))
         self.supervisor = SystemSupervisor(driver, cfg.supervisor, clock=clock, gate=self.gate)
         self.backup.supervisor = self.supervisor
-        self.context = RuntimeContext(driver, self.supervisor, self.backup, self.gate, cfg, clock)
-        robot_info = getattr(driver, "robot_info", None)
-        if callable(robot_info):
-            self.context.robot = robot_info()
+        self.context = RuntimeContext(driver, self.supervisor, self.backup, self.gate, cfg, clock, robot=robot)
+        self.watchdog = self._make_watchdog()
         self.factory = BehaviorTreeFactory(context=self.context)
         for registration in register:
             registration(self.factory)
@@ -99,6 +103,20 @@ class AutonomyRuntime:
         self._grid_origin = 0.0
         self._tick_origin = 0.0
         self.running = False
+
+    def _make_watchdog(self) -> LoopWatchdog | None:
+        """The off-loop dead-man (watchdog.py): on for real-time loops unless configured off;
+        never in the passthrough baseline (no dead-man there)."""
+        cfg = self.config.gate
+        wanted = (not is_virtual(self.loop)) if cfg.watchdog is None else cfg.watchdog
+        if not wanted or cfg.passthrough:
+            return None
+        zero = getattr(self.driver, "emergency_zero", None)
+        if not callable(zero):
+            log.warning("watchdog_unavailable", driver=getattr(self.driver, "name", "?"),
+                        reason="the driver has no thread-safe emergency_zero()")
+            return None
+        return LoopWatchdog(zero, cfg.deadman_timeout)
 
     # -- tree ----------------------------------------------------------------------------------
     def load_tree(self, source: str | Path, *, tree_id: str | None = None) -> Tree:
@@ -156,6 +174,9 @@ class AutonomyRuntime:
                                spawn(self.backup.run(), name="backup"),
                                spawn(self.gate.run(), name="gate")]
         self.running = True
+        if self.watchdog is not None:
+            self.gate.watchdog = self.watchdog
+            self.watchdog.start()
         if tick:
             self.gate.heartbeat()  # the first tick is due within one period: no spurious dead-man
             self._start_tick_task()

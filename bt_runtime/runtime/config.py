@@ -64,6 +64,10 @@ class GateConfig(_Model):
     tree_stale_timeout: float = Field(0.2, gt=0, description="tree command older than this: ignored")
     passthrough: bool = Field(False, description="baseline mode: forward navigation commands only, "
                                                  "no dead-man, like a plain Nav2 setup")
+    watchdog: bool | None = Field(None, description="dead-man on its own OS thread (zeroes the base when the "
+                                                    "event loop stalls); None: on for real-time loops")
+    nonfinite_repeats: int = Field(3, ge=1, description="non-finite commands in a row from one source before "
+                                                        "the tree gets a failure")
 
 
 class RuntimeConfig(_Model):

@@ -100,6 +100,10 @@ class RobotDriver(Protocol):
     def send_velocity(self, linear: float, angular: float) -> None:
         """Command the base. Non-blocking. Only the decision gate calls this."""
 
+    def emergency_zero(self) -> None:
+        """Command zero at once, from any thread (the off-loop watchdog and the shutdown path
+        call it while the event loop may be blocked). Must not touch the event loop's state."""
+
     def components(self) -> list[ComponentInfo]: ...
 
     def component_state(self, name: str) -> ComponentState: ...

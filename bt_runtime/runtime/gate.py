@@ -8,6 +8,13 @@ switch of source is logged with its reason.
 
 In ``passthrough`` mode (the "without autonomy layer" baseline) it forwards navigation
 commands like a plain Nav2 setup does: no dead-man, no tree.
+
+Every command, whatever its source, goes through one output path: a non-finite command is
+refused (zero goes out, the source is logged and counted; repeated, the tree's node that sent
+it fails with ``UnsafeCommandError``, or navigation is cancelled so the node waiting for it
+fails), and finite ones are clamped to the robot's speed and acceleration limits and the
+current speed limit (``command_limits.py``). With a ``LoopWatchdog`` attached, sends are
+serialised with it and every heartbeat refreshes it (``watchdog.py``).
 """
 
 from __future__ import annotations
@@ -20,16 +27,32 @@ from typing import TYPE_CHECKING, Any
 
 import structlog
 
+from .command_limits import CommandLimiter, MotionLimits, is_finite
 from .config import GateConfig
 from .messages import ZERO_TWIST, Twist
 
 if TYPE_CHECKING:
     from .backup import DataBackup
     from .driver import RobotDriver
+    from .watchdog import LoopWatchdog
 
 log = structlog.get_logger("bt_runtime.gate")
 
 ESTOP, DEADMAN, TREE, NAV, IDLE = "estop", "deadman", "tree", "nav", "idle"
+
+
+class UnsafeCommandError(ValueError):
+    """A source kept sending non-finite velocity commands (raised in the node that sent them)."""
+
+
+@dataclass(slots=True)
+class RefusedCommands:
+    """Non-finite commands refused from one source."""
+
+    total: int = 0
+    consecutive: int = 0
+    last: tuple[float, float] = (0.0, 0.0)
+    last_time: float = 0.0
 
 
 @dataclass(slots=True, frozen=True)
@@ -44,7 +67,8 @@ class DecisionGate:
     """Multiplexes tree and navigation commands into ``driver.send_velocity``."""
 
     def __init__(self, driver: RobotDriver, config: GateConfig | None = None, *,
-                 clock: Callable[[], float], backup: DataBackup | None = None):
+                 clock: Callable[[], float], backup: DataBackup | None = None,
+                 limits: MotionLimits | None = None):
         self.driver = driver
         self.config = config or GateConfig()
         self.clock = clock
@@ -65,6 +89,10 @@ class DecisionGate:
         self.sent = 0
         self._unsubscribe: Callable[[], None] | None = None
         self.on_output: Callable[[float, Twist, str], Any] | None = None
+        self.limiter = CommandLimiter(limits)
+        self._last_output_time = -math.inf
+        self.refused: dict[str, RefusedCommands] = {}
+        self.watchdog: LoopWatchdog | None = None
 
     # -- setup ---------------------------------------------------------------------------------
     def attach(self) -> None:
@@ -76,6 +104,10 @@ class DecisionGate:
             self._unsubscribe = None
 
     def _on_nav(self, twist: Twist) -> None:
+        if self._refuse_if_nonfinite(NAV, twist.linear, twist.angular):
+            twist = ZERO_TWIST
+            if self.refused[NAV].consecutive == self.config.nonfinite_repeats:
+                self._cancel_navigation()
         self._nav = twist
         now = self.clock()
         self._nav_stamp = now
@@ -87,6 +119,9 @@ class DecisionGate:
     def heartbeat(self) -> None:
         """The tree is alive (the tick loop calls this before every tick)."""
         self._heartbeat = self.clock()
+        watchdog = self.watchdog
+        if watchdog is not None:
+            watchdog.refresh()
 
     def after_tick(self) -> None:
         """Publish the decision right after a tick, so the tree's commands go out at once."""
@@ -95,9 +130,49 @@ class DecisionGate:
 
     def set_tree_command(self, linear: float, angular: float) -> None:
         """Drive with this command; it must be refreshed (it goes stale after
-        ``tree_stale_timeout``) or cleared with ``clear_tree_command``."""
-        self._tree = Twist(float(linear), float(angular))
+        ``tree_stale_timeout``) or cleared with ``clear_tree_command``.
+
+        A non-finite value is refused: the tree commands zero instead; after
+        ``nonfinite_repeats`` refusals in a row this raises ``UnsafeCommandError`` (the
+        calling node fails)."""
+        linear, angular = float(linear), float(angular)
         self._tree_stamp = self.clock()
+        if self._refuse_if_nonfinite(TREE, linear, angular):
+            self._tree = ZERO_TWIST
+            record = self.refused[TREE]
+            if record.consecutive >= self.config.nonfinite_repeats:
+                raise UnsafeCommandError(f"non-finite velocity command ({linear}, {angular}) refused "
+                                         f"{record.consecutive} times in a row")
+            return
+        self._tree = Twist(linear, angular)
+
+    def _refuse_if_nonfinite(self, source: str, linear: float, angular: float) -> bool:
+        """Count a non-finite command from ``source`` (True: refused), or reset its streak."""
+        record = self.refused.get(source)
+        if math.isfinite(linear) and math.isfinite(angular):
+            if record is not None:
+                record.consecutive = 0
+            return False
+        if record is None:
+            record = self.refused[source] = RefusedCommands()
+        record.total += 1
+        record.consecutive += 1
+        record.last = (linear, angular)
+        record.last_time = self.clock()
+        if record.consecutive == 1 or record.total % 1000 == 0:
+            log.warning("command_refused", source=source, linear=linear, angular=angular,
+                        reason="non-finite", total=record.total, sim_time=round(self.clock(), 3))
+        return True
+
+    def _cancel_navigation(self) -> None:
+        log.error("navigation_cancelled", reason="repeated non-finite navigation commands",
+                  sim_time=round(self.clock(), 3))
+        cancel = getattr(getattr(self.driver, "navigation", None), "cancel_all", None)
+        if callable(cancel):
+            try:
+                cancel()
+            except Exception as exc:
+                log.error("navigation_cancel_failed", error=repr(exc))
 
     def clear_tree_command(self) -> None:
         self._tree = None
@@ -150,6 +225,9 @@ class DecisionGate:
 
     def set_speed_limit(self, linear: float | None, angular: float | None = None, reason: str = "") -> None:
         """Cap the output speeds (None lifts the cap); also passed on to navigation if it can."""
+        for name, value in (("linear", linear), ("angular", angular)):
+            if value is not None and (value != value or value < 0):
+                raise ValueError(f"speed limit {name} must be >= 0 m/s or rad/s, got {value!r}")
         if linear is None and angular is None:
             self.speed_limit = None
             self.speed_limit_reason = ""
@@ -214,28 +292,25 @@ class DecisionGate:
 
     def _apply(self, now: float) -> None:
         source, twist, reason = self.decide(now)
-        twist = self._limit(twist)
+        if not is_finite(twist):  # every input is checked already; this is the last line
+            self._refuse_if_nonfinite(source, twist.linear, twist.angular)
+            twist = ZERO_TWIST
+        twist = self.limiter.apply(twist, self.last_output, now - self._last_output_time, self.speed_limit)
         if source != self.source:
             self.switches.append(GateSwitch(now, source, self.source, reason))
             log.info("gate_source", source=source, previous=self.source, reason=reason, sim_time=round(now, 3))
             self.source = source
-        self.driver.send_velocity(twist.linear, twist.angular)
+        watchdog = self.watchdog
+        if watchdog is None:
+            self.driver.send_velocity(twist.linear, twist.angular)
+        else:
+            with watchdog.lock:
+                self.driver.send_velocity(twist.linear, twist.angular)
+                watchdog.note_sent(not twist.is_zero)
         self.last_output = twist
+        self._last_output_time = now
         self.sent += 1
         if self.backup is not None:
             self.backup.record("cmd_vel", twist, now)
         if self.on_output is not None:
             self.on_output(now, twist, source)
-
-    def _limit(self, twist: Twist) -> Twist:
-        limit = self.speed_limit
-        if limit is None or twist.is_zero:
-            return twist
-        vmax, wmax = limit
-        v, w = twist.linear, twist.angular
-        if abs(v) > vmax:  # scale both, keeping the curvature
-            scale = vmax / abs(v)
-            v, w = v * scale, w * scale
-        if abs(w) > wmax:
-            w = math.copysign(wmax, w)
-        return Twist(v, w)

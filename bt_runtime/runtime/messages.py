@@ -245,6 +245,8 @@ class RobotInfo:
     radius: float = 0.105
     max_linear: float = 0.22
     max_angular: float = 2.84
+    max_linear_accel: float = 1.0  # m/s^2; the decision gate ramps commands up no faster
+    max_angular_accel: float = 12.5  # rad/s^2
     capacity_ah: float = 1.8
     voltage_nominal: float = 11.1
     idle_power_w: float = 6.0

@@ -9,6 +9,13 @@ from bt_runtime.runtime.config import GateConfig, RuntimeConfig
 from bt_runtime.runtime.messages import Twist
 
 
+async def hold(gate, linear, angular, seconds=0.3):
+    """Keep commanding (a tree command goes stale after 0.2 s) while the gate ramps up to it."""
+    for _ in range(round(seconds / 0.01)):
+        gate.set_tree_command(linear, angular)
+        await asyncio.sleep(0.01)
+
+
 def sent_commands(rt):
     out = []
     rt.driver.sim.subscribe("cmd_vel_out", lambda t: out.append((rt.clock(), t)))
@@ -27,10 +34,9 @@ async def test_priority_estop_over_tree_over_nav(make_runtime):
             await asyncio.sleep(0.05)
 
     nav = asyncio.get_running_loop().create_task(nav_publisher())
-    await asyncio.sleep(0.1)
+    await asyncio.sleep(0.2)  # commands ramp up at the robot's acceleration limit (1 m/s^2)
     assert gate.source == "nav" and gate.last_output == Twist(0.1, 0.0)
-    gate.set_tree_command(-0.05, 0.2)
-    await asyncio.sleep(0.02)
+    await hold(gate, -0.05, 0.2, 0.15)
     assert gate.source == "tree" and gate.last_output == Twist(-0.05, 0.2)
     gate.emergency_stop("test")
     assert gate.last_output.is_zero  # an explicit zero goes out at once
@@ -55,16 +61,13 @@ async def test_speed_limit_scales_commands_keeping_curvature(make_runtime):
     await rt.start()
     gate = rt.gate
     gate.set_speed_limit(0.1, 0.5, reason="lidar degraded")
-    gate.set_tree_command(0.2, 0.4)
-    await asyncio.sleep(0.02)
+    await hold(gate, 0.2, 0.4)  # commands ramp up at the robot's acceleration limits
     out = gate.last_output
     assert abs(out.linear - 0.1) < 1e-12 and abs(out.angular - 0.2) < 1e-12
-    gate.set_tree_command(0.0, 2.0)
-    await asyncio.sleep(0.02)
+    await hold(gate, 0.0, 2.0)
     assert gate.last_output == Twist(0.0, 0.5)
     gate.set_speed_limit(None)
-    gate.set_tree_command(0.2, 0.4)
-    await asyncio.sleep(0.02)
+    await hold(gate, 0.2, 0.4)
     assert gate.last_output == Twist(0.2, 0.4)
     await rt.stop()
 
@@ -120,8 +123,9 @@ async def test_blocked_navigation_is_held_off(make_runtime):
         await asyncio.sleep(0.03)
         assert gate.last_output.is_zero
     gate.allow_navigation(True)
-    bus.publish("nav_cmd_vel", Twist(0.2, 0.0))
-    await asyncio.sleep(0.02)
+    for _ in range(10):
+        bus.publish("nav_cmd_vel", Twist(0.2, 0.0))
+        await asyncio.sleep(0.03)  # ramping up at 1 m/s^2
     assert gate.last_output == Twist(0.2, 0.0)
     await rt.stop()
 

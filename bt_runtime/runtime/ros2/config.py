@@ -133,6 +133,8 @@ class RobotConfig(_Model):
     radius: float = Field(0.105, gt=0)
     max_linear: float = Field(0.22, gt=0)
     max_angular: float = Field(2.84, gt=0)
+    max_linear_accel: float = Field(1.0, gt=0, description="m/s^2: the gate ramps commands up no faster")
+    max_angular_accel: float = Field(12.5, gt=0, description="rad/s^2")
     capacity_ah: float = Field(1.8, gt=0)
     voltage_nominal: float = Field(11.1, gt=0)
     idle_power_w: float = Field(6.0, ge=0)
