@@ -1,10 +1,11 @@
 """Collision behaviours (fn_req6): detect, back out, locate the obstacle, mark it, re-plan.
 
-Detection works from a bumper/contact sensor or, for robots without one (the paper's
-ROSbot), from an IMU acceleration spike. The contact point is estimated from the contact
-direction (the bumper's bearing, or the opposite of the impact acceleration) rather than the
-paper's "straight ahead". Backing out retraces the recent commands from the data backup when
-the robot ran into the obstacle, or moves away from the contact otherwise.
+Detection works from the bumper (which of its segments closed) or, for robots without one
+(the paper's ROSbot, Sec. III-F), from an IMU acceleration spike and its direction. Either
+gives a contact arc on the body's edge; placed with the robot's *own* pose estimate it says
+where the obstacle is (``nodes.contact``). Nothing here sees the physics' contact point or
+the true pose. Backing out retraces the recent commands from the data backup when the robot
+ran into the obstacle, or moves away from the contact otherwise.
 """
 
 from __future__ import annotations
@@ -15,10 +16,25 @@ from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActio
 from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.messages import Contact, Imu, Pose2D, wrap_angle
 
+from .contact import CONTACT_ARC, ContactArc, marks_of, segments_arc
 from .robot import robot_pose
 from .types import POSE
 
 SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
+
+
+def bumper_arc(context, contact) -> tuple[float, float] | None:
+    """(middle bearing, half width) in the robot frame of a pressed bumper, or None. Uses the
+    pressed segments and the robot's segment spans; a bumper that reports a bearing itself
+    (ROS 2 Vector3 bumpers) gets a quarter-turn arc around it."""
+    if not isinstance(contact, Contact) or not contact.in_contact:
+        return None
+    arc = segments_arc(context.robot.bumper_segments, contact.segments)
+    if arc is not None:
+        return arc
+    if math.isfinite(contact.direction):
+        return contact.direction, math.pi / 4
+    return None
 
 
 class ImpactDetector:
@@ -57,16 +73,17 @@ class ImpactDetector:
 
 
 class CollisionDetected(ConditionNode):
-    """SUCCESS while in contact (bumper) or just after an impact (IMU spike); writes the
-    contact bearing (robot frame, rad, 0 = ahead) and, from the bumper, the contact point."""
+    """SUCCESS while the bumper is pressed or just after an impact (IMU spike); writes the
+    contact arc's middle bearing (robot frame, rad, 0 = ahead) and its half width."""
 
     @classmethod
     def provided_ports(cls):
         return [input_port("source", str, "any", "bumper | imu | any"),
                 input_port("imu_threshold", float, 6.0, "m/s^2; well above the base's acceleration limits"),
                 input_port("imu_window", float, 0.25, "s of IMU history to look at"),
+                input_port("imu_spread", float, 0.6, "rad either side of the impact direction"),
                 output_port("direction", float, "{collision_direction}"),
-                output_port("contact_point", POSE, "{contact_point}")]
+                output_port("spread", float, "{collision_spread}", "rad either side of direction")]
 
     def __init__(self, name, config=None):
         super().__init__(name, config)
@@ -76,16 +93,16 @@ class CollisionDetected(ConditionNode):
         ctx = self.context
         source = self.get_input("source")
         if source in ("bumper", "any"):
-            contact = ctx.backup.latest("bumper")
-            if isinstance(contact, Contact) and contact.in_contact and math.isfinite(contact.direction):
-                self.set_output("direction", float(contact.direction))
-                if contact.point is not None and all(math.isfinite(c) for c in contact.point):
-                    self.set_output("contact_point", Pose2D(contact.point[0], contact.point[1], 0.0))
+            arc = bumper_arc(ctx, ctx.backup.latest("bumper"))
+            if arc is not None:
+                self.set_output("direction", float(arc[0]))
+                self.set_output("spread", float(arc[1]))
                 return SUCCESS
         if source in ("imu", "any"):
             impact = self._impacts(ctx, self.get_input("imu_window"), self.get_input("imu_threshold"))
             if impact is not None:
                 self.set_output("direction", impact[1])
+                self.set_output("spread", float(self.get_input("imu_spread")))
                 return SUCCESS
         return FAILURE
 
@@ -99,31 +116,31 @@ class InContact(ConditionNode):
 
 
 class EstimateContactPoint(SyncActionNode):
-    """Where the obstacle is: the bumper's contact point if known, else the robot's edge in
-    the contact direction, pushed ``offset`` further out."""
+    """Where the obstacle is, from the robot's own pose estimate and the sensed contact arc:
+    ``arc`` (map frame) and ``point``, the arc's middle pushed ``offset`` beyond the body."""
 
     @classmethod
     def provided_ports(cls):
         return [input_port("direction", float, "{collision_direction}", "contact bearing, robot frame"),
+                input_port("spread", float, "{collision_spread}", "rad either side of direction"),
                 input_port("offset", float, 0.05, "m beyond the footprint"),
-                output_port("point", POSE, "{contact_point}")]
+                output_port("point", POSE, "{contact_point}"),
+                output_port("arc", CONTACT_ARC, "{contact_arc}")]
 
     def tick(self):
         ctx = self.context
-        contact = ctx.backup.latest("bumper")
         pose = robot_pose(self)
-        if pose is None:
+        if pose is None or not all(map(math.isfinite, (pose.x, pose.y, pose.yaw))):
             return FAILURE
         bearing = self.get_input("direction", 0.0)
-        offset = self.get_input("offset")
-        heading = pose.yaw + bearing
-        if isinstance(contact, Contact) and contact.in_contact and contact.point is not None \
-                and all(math.isfinite(c) for c in contact.point):
-            x, y = contact.point
-            x, y = x + offset * math.cos(heading), y + offset * math.sin(heading)
-        else:
-            reach = ctx.robot.radius + offset
-            x, y = pose.x + reach * math.cos(heading), pose.y + reach * math.sin(heading)
+        spread = self.get_input("spread", 0.0)
+        if not math.isfinite(bearing):
+            return FAILURE
+        spread = min(abs(spread), math.pi) if math.isfinite(spread) else math.pi / 4
+        radius = ctx.robot.radius
+        arc = ContactArc(pose.x, pose.y, wrap_angle(pose.yaw + bearing), spread, radius)
+        x, y = arc.point_at(arc.bearing, radius + self.get_input("offset"))
+        self.set_output("arc", arc)
         self.set_output("point", Pose2D(x, y, 0.0))
         return SUCCESS
 
@@ -234,15 +251,34 @@ class ReleaseRobot(SyncActionNode):
 
 
 class MarkObstacle(AsyncActionNode):
-    """Add an obstacle at ``point`` to the navigation map (kept across costmap clears)."""
+    """Mark the obstacle in the navigation map (kept across costmap clears).
+
+    With a contact ``arc`` the mark covers it: discs of ``radius`` just outside the body along
+    the arc, extended ``margin`` m past each end (the chord plus a margin), so corner and
+    oblique hits are covered. A hit within ``merge_distance`` of an earlier mark grows that
+    mark. Without an arc, one disc at ``point``."""
 
     @classmethod
     def provided_ports(cls):
-        return [input_port("point", POSE, "{contact_point}"), input_port("radius", float, 0.15, "m")]
+        return [input_port("point", POSE, "{contact_point}"), input_port("radius", float, 0.15, "m"),
+                input_port("arc", CONTACT_ARC, "{contact_arc}", "the sensed contact (EstimateContactPoint)"),
+                input_port("margin", float, 0.1, "m past each end of the arc"),
+                input_port("merge_distance", float, 0.3, "m: a hit this close to a mark grows it"),
+                output_port("mark", int, "{collision_mark}", "index of the mark made or grown")]
 
     async def run(self):
-        point = self.get_input("point")
-        await self.context.navigation.add_obstacle(point.x, point.y, self.get_input("radius"))
+        ctx = self.context
+        radius = self.get_input("radius")
+        arc = self.get_input("arc", None)
+        if isinstance(arc, ContactArc):
+            points = arc.chord(arc.radius + radius, self.get_input("margin"))
+        else:
+            point = self.get_input("point")
+            points = [(point.x, point.y)]
+        index, discs = marks_of(ctx).place(points, radius, self.get_input("merge_distance"))
+        for x, y, r in discs:
+            await ctx.navigation.add_obstacle(x, y, r)
+        self.set_output("mark", index)
         return SUCCESS
 
 

@@ -103,7 +103,8 @@ class SimDriver:
                          capacity_ah=battery.capacity_ah,
                          voltage_nominal=(battery.voltage_full + battery.voltage_empty) / 2,
                          idle_power_w=battery.idle_power_w, k_linear=battery.k_linear,
-                         k_angular=battery.k_angular)
+                         k_angular=battery.k_angular,
+                         bumper_segments=profile.bumper.spans() if profile.bumper is not None else ())
 
     async def restart(self, name: str) -> bool:
         if name in self._nav_names:

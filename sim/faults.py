@@ -27,8 +27,6 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 import structlog
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, model_validator
 
-from bt_runtime.runtime.messages import Contact
-
 from .world import CircleObstacle, PolygonObstacle, SegmentObstacle
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -347,10 +345,8 @@ class FaultInjector:
         hit_dir = math.atan2(math.sin(f.direction + math.pi), math.cos(f.direction + math.pi))
         r = sim.profile.radius
         point = (pose.x + r * math.cos(pose.yaw + hit_dir), pose.y + r * math.sin(pose.yaw + hit_dir))
-        now = sim.now
-        contact = Contact(now, True, hit_dir, point, f.impulse)
         if f.contact_duration > 0:
-            sim._synthetic.append((now + f.contact_duration, contact))
+            sim.touch(hit_dir, f.contact_duration)
         self._record(f, impulse_xy=(ix, iy), contact_direction=hit_dir, point=point)
 
     def _do_invisible_obstacle(self, f: InvisibleObstacle) -> str:

@@ -75,6 +75,56 @@ class LocalizationSpec(_Spec):
     correlation: float = Field(0.9, ge=0, lt=1)  # AR(1) coefficient per update
 
 
+class BumperSegment(_Spec):
+    """One bumper switch: it closes when the body is touched between ``from_deg`` and
+    ``to_deg`` (robot frame, counter-clockwise, 0 = straight ahead; the span may cross 180)."""
+
+    name: str
+    from_deg: float = Field(ge=-360, le=360)
+    to_deg: float = Field(ge=-360, le=360)
+
+    @property
+    def start(self) -> float:
+        return math.radians(self.from_deg)
+
+    @property
+    def width(self) -> float:
+        """Angular span (rad, in (0, 2*pi])."""
+        w = (self.to_deg - self.from_deg) % 360.0
+        return math.radians(w if w > 0 else 360.0)
+
+    def contains(self, bearing: float) -> bool:
+        return (bearing - self.start) % (2 * math.pi) <= self.width
+
+
+class BumperSpec(_Spec):
+    """A contact bumper as segments with known angular spans; it reports which are pressed
+    (never where, nor how hard)."""
+
+    rate_hz: float = Field(10.0, gt=0)
+    segments: list[BumperSegment] = Field(min_length=1)
+
+    def pressed(self, bearing: float) -> tuple[int, ...]:
+        """Indices of the segments a touch at ``bearing`` (robot frame, rad) closes."""
+        return tuple(i for i, seg in enumerate(self.segments) if seg.contains(bearing))
+
+    def bearing(self, pressed: tuple[int, ...]) -> float:
+        """The middle of the pressed segments (circular mean of their centres), NaN if none."""
+        if not pressed:
+            return math.nan
+        x = y = 0.0
+        for i in pressed:
+            seg = self.segments[i]
+            mid = seg.start + seg.width / 2
+            x += math.cos(mid)
+            y += math.sin(mid)
+        return math.atan2(y, x)
+
+    def spans(self) -> tuple[tuple[float, float], ...]:
+        """(start, width) per segment in radians, as the autonomy layer is told them."""
+        return tuple((seg.start, seg.width) for seg in self.segments)
+
+
 class BatterySpec(_Spec):
     capacity_ah: float = Field(gt=0)
     voltage_full: float = Field(gt=0)
@@ -119,7 +169,7 @@ class RobotProfile(_Spec):
     odom: OdomSpec = Field(default_factory=OdomSpec)
     localization: LocalizationSpec = Field(default_factory=LocalizationSpec)
     battery: BatterySpec
-    bumper_rate_hz: float = Field(10.0, gt=0)  # while in contact
+    bumper: BumperSpec | None = None  # None: no bumper, collisions are sensed by the IMU alone
 
     @property
     def max_wheel_speed(self) -> float:

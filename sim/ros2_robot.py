@@ -158,7 +158,10 @@ class SimRobot:
             self._servers.append(dds.ServiceServer(
                 node, f"/{which}_costmap/clear_entirely_{which}_costmap", idl.ClearEntireCostmap_Request,
                 idl.ClearEntireCostmap_Response, self._clear(nav, which)))
+        present = {c.name for c in sim.components()}  # a robot without a bumper has no bumper node
         for name in (*self.LIFECYCLE, *self.NAV_LIFECYCLE):
+            if name not in present and name not in self.NAV_LIFECYCLE:
+                continue
             self.lifecycle[name] = ST.PRIMARY_STATE_ACTIVE
             self._servers.append(dds.ServiceServer(node, f"{name}/get_state", idl.GetState_Request,
                                                    idl.GetState_Response, self._get_state(name)))
@@ -239,7 +242,9 @@ class SimRobot:
         if self.node is None or self.node.closed:
             return
         self.writers["bumper"].write(idl.Bool(bool(m.in_contact)))
-        vec = (idl.Vector3(math.cos(m.direction), math.sin(m.direction), m.impulse) if m.in_contact
+        spec = self.sim.profile.bumper
+        bearing = spec.bearing(m.segments) if spec is not None else math.nan
+        vec = (idl.Vector3(math.cos(bearing), math.sin(bearing), 1.0) if m.in_contact and math.isfinite(bearing)
                else idl.Vector3())
         self.writers["bumper_contact"].write(idl.Vector3Stamped(header=_header("base_link"), vector=vec))
 

@@ -206,17 +206,23 @@ class OdomDriver(Driver):
 
 # ---------------------------------------------------------------------------------------------
 class BumperDriver(Driver):
-    """Contact state: published at once when it changes, and at the bumper rate all the time
-    (like TurtleBot3's sensor_state topic), so a watchdog can tell a silent driver from "no
-    contact". The state is set by the simulator from pymunk's collision handler (and from the
-    push fault)."""
+    """The bumper's switches: which segments (the profile's angular spans) are pressed. Published
+    at once when that changes, and at the bumper rate all the time (like TurtleBot3's
+    sensor_state topic), so a watchdog can tell a silent driver from "no contact". The
+    simulator says which segments the bodies touch (pymunk's contacts, the push fault); like a
+    real bumper, the message carries neither the contact point nor the force."""
 
     def __init__(self, sim: Simulator, **kw) -> None:
-        super().__init__(sim, "bumper", "bumper", sim.profile.bumper_rate_hz, **kw)
+        spec = sim.profile.bumper
+        super().__init__(sim, "bumper", "bumper", spec.rate_hz, **kw)
+        self.spec = spec
         self.current = Contact(0.0, False)
 
-    def set_contact(self, now: float, contact: Contact) -> None:
-        changed = contact.in_contact != self.current.in_contact
+    def press(self, now: float, bearings: list[float]) -> None:
+        """The body is touched at these bearings (robot frame); [] = nothing touches it."""
+        pressed = tuple(sorted({i for b in bearings for i in self.spec.pressed(b)}))
+        contact = Contact(now, bool(pressed), pressed)
+        changed = contact.segments != self.current.segments
         self.current = contact
         if changed and self.state is ACTIVE and now >= self.silent_until and now >= self.stale_until:
             msg = self.corrupt(contact, self.corrupt_mode) if now < self.corrupt_until else contact
@@ -226,23 +232,21 @@ class BumperDriver(Driver):
 
     def on_activate(self) -> None:
         # a restarted bumper reports its state at once
-        c = self.current
-        msg = Contact(self.sim.now, c.in_contact, c.direction, c.point, c.impulse)
+        msg = Contact(self.sim.now, self.current.in_contact, self.current.segments)
         self.last_message = msg
         self.published += 1
         self._publish(self.topic, msg)
 
-    def sample(self, now: float) -> Contact | None:
+    def sample(self, now: float) -> Contact:
         c = self.current
-        if not c.in_contact:
-            return Contact(now, False)
-        return Contact(now, True, c.direction, c.point, c.impulse)
+        return Contact(now, c.in_contact, c.segments)
 
     def corrupt(self, msg: Contact, mode: str) -> Contact:
         if mode == "nan":
-            return Contact(msg.stamp, msg.in_contact, math.nan, (math.nan, math.nan), math.nan)
-        return Contact(msg.stamp, bool(self.fault_rng.integers(0, 2)), self.garbage(math.pi), None,
-                       abs(self.garbage(10.0)))
+            return Contact(msg.stamp, msg.in_contact, msg.segments, math.nan)
+        n = len(self.spec.segments)
+        pressed = tuple(int(i) for i in np.flatnonzero(self.fault_rng.integers(0, 2, n)))
+        return Contact(msg.stamp, bool(pressed), pressed)
 
 
 # ---------------------------------------------------------------------------------------------

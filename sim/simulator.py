@@ -35,7 +35,7 @@ import numpy as np
 import structlog
 from pydantic import BaseModel, ConfigDict, Field
 
-from bt_runtime.runtime.messages import ComponentInfo, ComponentState, Contact, Pose2D, Twist
+from bt_runtime.runtime.messages import ComponentInfo, ComponentState, Pose2D, Twist
 
 from .bus import Bus
 from .components import Component
@@ -134,12 +134,14 @@ class Simulator:
         self.lidar = LidarDriver(self, **kw(restart_delay=self._delay("lidar")))
         self.imu = ImuDriver(self, **kw(restart_delay=self._delay("imu")))
         self.odom = OdomDriver(self, **kw(restart_delay=self._delay("odom")))
-        self.bumper = BumperDriver(self, **kw(restart_delay=self._delay("bumper")))
+        self.bumper = (BumperDriver(self, **kw(restart_delay=self._delay("bumper")))
+                       if self.profile.bumper is not None else None)  # ROSbot 2.0: none
         self.battery_driver = BatteryDriver(self, **kw(restart_delay=self._delay("battery")))
         self.localization = LocalizationDriver(self, **kw(restart_delay=self._delay("localization")))
         self._components: dict[str, Component] = {}
         for c in (self.lidar, self.imu, self.odom, self.bumper, self.battery_driver, self.localization):
-            self._components[c.name] = c
+            if c is not None:
+                self._components[c.name] = c
         self._drivers = list(self._components.values())
         self._schedule_drivers()
 
@@ -155,7 +157,7 @@ class Simulator:
         self._traj: list[tuple] = []
         self._traj_steps = max(1, int(round(self.physics_hz / options.trajectory_hz)))
         self._touching: dict[str, tuple[float, float]] = {}
-        self._synthetic: list[tuple[float, Contact]] = []
+        self._synthetic: list[tuple[float, float]] = []  # (until, bearing) of pushes
         self.in_contact = False
         self.perf = {"steps": 0, "step_s": 0.0, "physics_s": 0.0}
 
@@ -297,15 +299,15 @@ class Simulator:
         perf["step_s"] += perf_counter() - t_start
 
     def _update_contacts(self, now: float, c: float, s: float, speed_before: float) -> None:
+        """Collision events for judging (with the true contact points), and the bumper's
+        switches: which segments the contact bearings fall in (robot frame)."""
         bx, by = self.physics.x, self.physics.y
         touching: dict[str, tuple[float, float]] = {}
-        best = None
-        total = 0.0
+        bearings: list[float] = []
         for cp in self.physics.contacts:
-            total += cp.impulse
             touching.setdefault(cp.obstacle, cp.point)
-            if best is None or cp.impulse > best.impulse:
-                best = cp
+            dx, dy = cp.point[0] - bx, cp.point[1] - by
+            bearings.append(math.atan2(-s * dx + c * dy, c * dx + s * dy))
         for name, pt in touching.items():
             if name not in self._touching:
                 self._event("collision", obstacle=name, point=pt, commanded_v=self.base.v,
@@ -314,19 +316,11 @@ class Simulator:
             if name not in touching:
                 self._event("collision_end", obstacle=name)
         self._touching = touching
-        self._synthetic = [(until, ct) for until, ct in self._synthetic if now < until]
-        if best is not None:
-            px, py = best.point
-            dx, dy = px - bx, py - by
-            direction = math.atan2(-s * dx + c * dy, c * dx + s * dy)
-            contact = Contact(now, True, direction, best.point, total)
-        elif self._synthetic:
-            ct = self._synthetic[-1][1]
-            contact = Contact(now, True, ct.direction, ct.point, ct.impulse)
-        else:
-            contact = Contact(now, False)
-        self.in_contact = contact.in_contact
-        self.bumper.set_contact(now, contact)
+        self._synthetic = [(until, bearing) for until, bearing in self._synthetic if now < until]
+        bearings.extend(bearing for _, bearing in self._synthetic)
+        self.in_contact = bool(bearings)
+        if self.bumper is not None:
+            self.bumper.press(now, bearings)
 
     def _record_truth(self, now: float) -> None:
         phys = self.physics
@@ -392,6 +386,11 @@ class Simulator:
     def apply_impulse(self, ix: float, iy: float, point: tuple[float, float] | None = None) -> None:
         """An external impulse (N*s, map frame) on the robot."""
         self.physics.apply_impulse(ix, iy, point)
+
+    def touch(self, bearing: float, duration: float) -> None:
+        """Something touches the body at ``bearing`` (robot frame) for ``duration`` seconds
+        (the push fault): the bumper segments there close."""
+        self._synthetic.append((self.now + duration, float(bearing)))
 
     def apply_force(self, fx: float, fy: float, duration: float) -> None:
         """An external force (N, map frame) on the robot's centre for ``duration`` seconds."""

@@ -105,14 +105,15 @@ class LocalizedPose:
 
 @dataclass(slots=True)
 class Contact:
-    """A bumper/contact event. ``direction`` is the contact bearing in the robot frame (rad,
-    0 = straight ahead, +pi/2 = left); ``point`` is the contact point in the map frame."""
+    """A bumper reading: whether it is pressed and which of its segments are (indices into the
+    robot's ``RobotInfo.bumper_segments``). A real bumper says nothing about where on the
+    segment or how hard, so neither does this message. ``direction`` (robot frame, rad,
+    0 = ahead, +pi/2 = left) is for bumpers that report a bearing themselves; NaN otherwise."""
 
     stamp: float
     in_contact: bool
-    direction: float = 0.0
-    point: tuple[float, float] | None = None
-    impulse: float = 0.0
+    segments: tuple[int, ...] = ()
+    direction: float = math.nan
 
 
 @dataclass(slots=True)
@@ -252,6 +253,9 @@ class RobotInfo:
     idle_power_w: float = 6.0
     k_linear: float = 12.0  # W per m/s
     k_angular: float = 1.0  # W per rad/s
+    # bumper segments as (start, width) in radians, robot frame, counter-clockwise from ahead;
+    # empty: the robot has no bumper (collisions are sensed by the IMU alone)
+    bumper_segments: tuple[tuple[float, float], ...] = ()
 
     def power(self, linear: float, angular: float = 0.0) -> float:
         return self.idle_power_w + self.k_linear * abs(linear) + self.k_angular * abs(angular)

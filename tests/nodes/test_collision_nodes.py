@@ -5,8 +5,11 @@ from __future__ import annotations
 import asyncio
 import math
 
+import pytest
+
 from bt_runtime.runtime.messages import Imu, Pose2D
 from nodes.collision import ImpactDetector
+from nodes.contact import marks_of
 from nodes.path import ring_candidates
 from tests.helpers import tree_xml
 
@@ -83,3 +86,34 @@ def test_ring_candidates_nearest_ring_first_facing_the_robot_first():
     assert radii == sorted(radii) and radii[0] == 0.1 and len(cands) == 24
     assert cands[0].x < 0 and abs(cands[0].y) < 1e-9  # first candidate faces the robot
     assert all(abs(math.atan2(-c.y, -c.x) - c.yaw) < 1e-9 for c in cands)  # each faces the goal
+
+
+MARK = RECOVER.replace("<ReleaseRobot/>", '<MarkObstacle radius="0.15"/><ReleaseRobot/>')
+
+
+@pytest.mark.parametrize("robot", ["rosbot2", "burger"])
+async def test_an_oblique_corner_hit_is_marked_across_the_sensed_arc(runtime, robot):
+    """The ROSbot senses the hit with its IMU alone, the burger with its bumper; either way the
+    mark is placed from the robot's own pose estimate and covers where the body really hit."""
+    rt = await runtime(tree_xml(MARK.replace("{src}", "any")), robot=robot)
+    sim, gate = rt.driver.sim, rt.gate
+    assert (sim.bumper is None) == (robot == "rosbot2")
+    pose = sim.pose
+    # a box turned 40 degrees, its corner 0.12 m left of the robot's path
+    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+    ahead, left = sim.profile.radius + 0.35, 0.12
+    sim.faults.invisible_obstacle(x=pose.x + c * ahead - s * left, y=pose.y + s * ahead + c * left,
+                                  yaw=pose.yaw + math.radians(40), width=0.4, depth=0.4, name="box")
+    for _ in range(500):
+        if sim.events_of("collision"):
+            break
+        gate.set_tree_command(0.2, 0.0)
+        await asyncio.sleep(0.01)
+    gate.clear_tree_command()
+    await asyncio.sleep(6.0)
+    hit = sim.events_of("collision")[0].data["point"]
+    discs = [d for mark in marks_of(rt.context).marks for d in mark.discs]
+    assert discs, "nothing was marked"
+    assert min(math.hypot(hit[0] - x, hit[1] - y) - r for x, y, r in discs) < 0.05
+    assert len(sim.events_of("collision")) == 1
+    await rt.stop()

@@ -141,7 +141,7 @@ class Converter:
             raise Drop("non-finite contact")
         if x == 0.0 and y == 0.0:
             return Contact(now, False)
-        return Contact(now, True, math.atan2(y, x), None, float(z))
+        return Contact(now, True, direction=math.atan2(y, x))  # z (force) is not used: a bumper says where, not how hard
 
     def twist(self, m: idl.Twist, now: float) -> Twist:
         v, w = m.linear.x, m.angular.z

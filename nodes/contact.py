@@ -1,0 +1,120 @@
+"""Where a collision was, as far as the robot can tell, and the map marks made from it.
+
+A bumper says which of its segments closed; the IMU says which way the impact pushed. Either
+gives a *contact arc*: a range of bearings (robot frame) on the body's edge. Placed with the
+robot's own pose estimate it becomes a map-frame arc, and the obstacle is marked across that
+arc (the chord plus a margin), so a corner or an oblique hit is covered and not a single
+point straight ahead. A later hit near an existing mark grows that mark instead of starting
+a new one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from bt_runtime.ports import PortType
+from bt_runtime.runtime.messages import wrap_angle
+
+
+@dataclass(slots=True, frozen=True)
+class ContactArc:
+    """A sensed contact in the map frame: the robot's estimated centre (``x``, ``y``), the
+    arc's middle ``bearing`` (map frame, rad) and ``half_width`` (rad), and the body
+    ``radius`` (m) where the touch was."""
+
+    x: float
+    y: float
+    bearing: float
+    half_width: float
+    radius: float
+
+    def point_at(self, bearing: float, reach: float) -> tuple[float, float]:
+        return self.x + reach * math.cos(bearing), self.y + reach * math.sin(bearing)
+
+    def chord(self, reach: float, margin: float) -> list[tuple[float, float]]:
+        """Points along the arc at distance ``reach`` from the robot's centre, extended by
+        ``margin`` metres beyond each end, no further apart than ``margin`` (or 5 cm)."""
+        extra = margin / max(reach, 1e-6)
+        span = 2 * (self.half_width + extra)
+        spacing = max(min(margin, 0.1), 0.05)
+        n = max(1, math.ceil(span * reach / spacing))
+        start = self.bearing - self.half_width - extra
+        return [self.point_at(start + span * i / n, reach) for i in range(n + 1)]
+
+    def to_string(self) -> str:
+        return f"{self.x:g};{self.y:g};{self.bearing:g};{self.half_width:g};{self.radius:g}"
+
+
+def _arc_from_string(text: str) -> ContactArc:
+    parts = [float(p) for p in text.replace(",", ";").split(";") if p.strip()]
+    if len(parts) != 5:
+        raise ValueError(f"a contact arc is 'x;y;bearing;half_width;radius', got {text!r}")
+    return ContactArc(*parts)
+
+
+CONTACT_ARC = PortType("bt_runtime::ContactArc", "custom", ContactArc, from_string=_arc_from_string,
+                       to_string=lambda a: a.to_string() if isinstance(a, ContactArc) else str(a))
+
+
+def segments_arc(spans: tuple[tuple[float, float], ...], pressed: tuple[int, ...]) -> tuple[float, float] | None:
+    """(middle bearing, half width) in the robot frame covering every pressed segment, or None
+    if no known segment is pressed. ``spans`` are (start, width) per segment."""
+    known = [spans[i] for i in pressed if 0 <= i < len(spans)]
+    if not known:
+        return None
+    x = y = 0.0
+    for start, width in known:
+        mid = start + width / 2
+        x += width * math.cos(mid)
+        y += width * math.sin(mid)
+    if math.hypot(x, y) < 1e-9:  # opposite segments: the whole body
+        return 0.0, math.pi
+    middle = math.atan2(y, x)
+    half = max(max(abs(wrap_angle(start - middle)), abs(wrap_angle(start + width - middle)))
+               for start, width in known)
+    return middle, min(half, math.pi)
+
+
+@dataclass(slots=True)
+class Mark:
+    """One obstacle as marked in the map: the discs sent to navigation."""
+
+    discs: list[tuple[float, float, float]] = field(default_factory=list)  # (x, y, radius)
+
+    def distance_to(self, x: float, y: float) -> float:
+        return min(math.hypot(x - dx, y - dy) - r for dx, dy, r in self.discs)
+
+
+class ObstacleMarks:
+    """The marks made so far (kept on ``context.extras['collision_marks']``)."""
+
+    def __init__(self) -> None:
+        self.marks: list[Mark] = []
+
+    def place(self, points: list[tuple[float, float]], radius: float,
+              merge_distance: float) -> tuple[int, list[tuple[float, float, float]]]:
+        """Add discs of ``radius`` at ``points``: to the mark that lies within
+        ``merge_distance`` of any of them (that mark grows), else as a new mark. Returns the
+        mark's index and the discs that are new."""
+        target = None
+        for i, mark in enumerate(self.marks):
+            if any(mark.distance_to(x, y) <= merge_distance + radius for x, y in points):
+                target = i
+                break
+        if target is None:
+            self.marks.append(Mark())
+            target = len(self.marks) - 1
+        mark = self.marks[target]
+        new = [(x, y, radius) for x, y in points
+               if not any(math.hypot(x - dx, y - dy) < 0.5 * radius for dx, dy, _ in mark.discs)]
+        mark.discs.extend(new)
+        return target, new
+
+
+def marks_of(context) -> ObstacleMarks:
+    extras = context.extras
+    marks = extras.get("collision_marks")
+    if not isinstance(marks, ObstacleMarks):
+        marks = extras["collision_marks"] = ObstacleMarks()
+    return marks
