@@ -362,9 +362,13 @@ class TreeNode:
     def _select_execute_tick(self) -> None:
         """Choose the fast path when there is nothing but ``tick()`` to run."""
         cfg = self.config
-        if cfg._pre or cfg._post or self._pre_hook or self._post_hook or self._monitor:
+        if self._pre_hook or self._post_hook or self._monitor:
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
             self._cell.fast = type(self)._execute_tick_full
+        elif cfg._pre or cfg._post:
+            fast = _conditions_tick(type(self).tick, cfg)
+            self.execute_tick = fast.__get__(self)  # type: ignore[method-assign]
+            self._cell.fast = fast
         else:
             self.__dict__.pop("execute_tick", None)
             execute_tick = type(self).execute_tick
@@ -1052,3 +1056,54 @@ def manifest_for(cls: type[TreeNode], registration_id: str, ports: Any = None,
     return TreeNodeManifest(registration_id, cls.node_type, declared,
                             description=getattr(cls, "description", "") or "",
                             metadata=list(cls.metadata()), builtin=builtin)
+
+
+def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig) -> Callable[[TreeNode], NodeStatus]:
+    """``_execute_tick_full`` for a node with pre/post-conditions and no hooks, specialised to
+    the scripts it has: no dictionary look-ups and no absent scripts on the tick path.
+
+    The scripts are taken from the config now; code that changes a node's conditions later
+    calls ``refresh_conditions()``, as it must for the fast paths too."""
+    pre = cfg._pre or {}
+    post = cfg._post or {}
+    idle_checks = tuple((script.run_bool, result, negate) for key, result, negate in (
+        ("_failureIf", FAILURE, False), ("_successIf", SUCCESS, False), ("_skipIf", SKIPPED, False),
+        ("_while", SKIPPED, True)) if (script := pre.get(key)) is not None)
+    running_while = pre["_while"].run_bool if "_while" in pre else None
+    on_success = tuple(s.run for k in ("_onSuccess", "_post") if (s := post.get(k)) is not None)
+    on_failure = tuple(s.run for k in ("_onFailure", "_post") if (s := post.get(k)) is not None)
+
+    def execute(node: TreeNode) -> NodeStatus:
+        bb = cfg.blackboard
+        enums = cfg.enums
+        cell = node._cell
+        current = cell.status
+        status = None
+        if current is IDLE:
+            for run_bool, result, negate in idle_checks:
+                if run_bool(bb, enums) is not negate:
+                    status = result
+                    break
+        elif current is RUNNING and running_while is not None and not running_while(bb, enums):
+            node.halt_node()
+            return SKIPPED
+        if status is None:
+            try:
+                status = tick(node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                raise NodeExecutionError(cfg.path, cfg.registration_id, exc) from exc
+        if status is SUCCESS:
+            for run in on_success:
+                run(bb, enums)
+        elif status is FAILURE:
+            for run in on_failure:
+                run(bb, enums)
+        if status is not SKIPPED:
+            if status is IDLE:
+                node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+            cell.status = status
+        return status
+
+    return execute
