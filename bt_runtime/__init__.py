@@ -7,7 +7,15 @@
 """
 
 from .blackboard import Blackboard
-from .errors import BehaviorTreeException, BTRuntimeError, LogicError, NodeExecutionError, XMLLoadError
+from .errors import (
+    BehaviorTreeException,
+    BTRuntimeError,
+    LogicError,
+    NodeExecutionError,
+    XMLLoadError,
+    XMLLogicError,
+    XMLRuntimeError,
+)
 from .factory import BehaviorTreeFactory
 from .node import (
                      AsyncActionNode,
@@ -27,6 +35,6 @@ __all__ = [
     "AsyncActionNode", "BTRuntimeError", "BehaviorTreeException", "BehaviorTreeFactory", "Blackboard",
     "ConditionNode", "ControlNode", "DecoratorNode", "LogicError", "NodeConfig", "NodeExecutionError",
     "NodeStatus", "NodeType", "PortDirection", "StatefulActionNode", "SyncActionNode", "Tree", "TreeNode",
-    "XMLLoadError", "bidirectional_port", "input_port", "output_port",
+    "XMLLoadError", "XMLLogicError", "XMLRuntimeError", "bidirectional_port", "input_port", "output_port",
 ]
 __version__ = "0.1.0"

@@ -8,6 +8,7 @@ supervisor, backup, gate, driver) through ``factory.context``, which every node 
 
 from __future__ import annotations
 
+import fnmatch
 import json
 from collections.abc import Callable, Iterable
 from enum import Enum
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from .blackboard import Blackboard
-from .errors import LogicError, XMLLoadError
+from .errors import BTRuntimeError, LogicError, XMLLoadError
 from .node import (
     NodeConfig,
     SimpleActionNode,
@@ -150,27 +151,52 @@ class BehaviorTreeFactory:
     # -- substitution rules --------------------------------------------------------------------
     def add_substitution_rule(self, pattern: str, rule: str | dict) -> None:
         """Replace matching nodes (by instance name, type ID or full-path wildcard) with another
-        registered type or a test node config dict (return_status, async_delay, ...)."""
+        registered type or a test node config dict (return_status, async_delay, ...).
+
+        As in BT.CPP (a map keyed by pattern) a second rule for the same pattern replaces the
+        first. The substitute keeps the original node's ports and registration ID: only the
+        object that is built changes, so the XML's attributes stay valid.
+        """
+        for i, (existing, _) in enumerate(self.substitution_rules):
+            if existing == pattern:
+                self.substitution_rules[i] = (pattern, rule)
+                return
         self.substitution_rules.append((pattern, rule))
 
     def clear_substitution_rules(self) -> None:
         self.substitution_rules.clear()
 
     def load_substitution_rule_from_json(self, text: str) -> None:
+        """BT.CPP's JSON form: ``TestNodeConfigs`` (optional) and ``SubstitutionRules``, whose
+        values name a config or else a registered node type. Every config must give
+        ``return_status`` or ``return_status_script`` (BTRuntimeError otherwise)."""
+        from .builtins.test_node import check_test_node_config
+
         data = json.loads(text)
         configs = data.get("TestNodeConfigs", {})
+        for name, config in configs.items():
+            check_test_node_config(name, config)
         for pattern, rule in data.get("SubstitutionRules", {}).items():
             self.add_substitution_rule(pattern, configs.get(rule, rule))
 
-    def substitution_builder(self, rule: Any, original: TreeNodeManifest) -> tuple[Builder, TreeNodeManifest]:
+    def substitution_builder(self, rule: Any) -> Builder:
+        """The builder a rule puts in place of a node's own."""
         if isinstance(rule, str):
             if rule not in self.builders:
-                raise XMLLoadError(f"Substitution rule refers to an unregistered node [{rule}]")
-            return self.builders[rule], self.manifests[rule]
+                raise BTRuntimeError(f"Substituted Node ID [{rule}] not found")
+            return self.builders[rule]
+        if not isinstance(rule, dict):
+            raise LogicError("Substitution rule is not a string or a TestNodeConfig")
         from .builtins.test_node import TestNode
 
-        manifest = TreeNodeManifest(original.registration_id, NodeType.ACTION, original.ports)
-        return (lambda n, c: TestNode(n, c, rule)), manifest
+        return lambda n, c: TestNode(n, c, rule)
+
+    def substitution_for(self, name: str, type_id: str, path: str) -> Any | None:
+        """The first rule whose pattern is the instance name, the type ID or matches the path."""
+        for pattern, rule in self.substitution_rules:
+            if pattern in (name, type_id) or fnmatch.fnmatchcase(path, pattern):
+                return rule
+        return None
 
     # -- trees ---------------------------------------------------------------------------------
     def register_behavior_tree_from_text(self, xml: str | bytes) -> LoadResult:
@@ -180,7 +206,8 @@ class BehaviorTreeFactory:
         return self.registry.load_file(path)
 
     def registered_behavior_trees(self) -> list[str]:
-        return list(self.registry.trees)
+        """The IDs of the registered trees, sorted (BT.CPP keeps them in a std::map)."""
+        return sorted(self.registry.trees)
 
     def clear_registered_behavior_trees(self) -> None:
         self.registry.clear()

@@ -397,7 +397,7 @@ class TreeNode:
         except NodeExecutionError:
             raise
         except Exception as exc:
-            raise NodeExecutionError(self.config.path, self.config.registration_id, exc) from exc
+            raise NodeExecutionError(self.config.path, self.config.registration_id, exc, self.name) from exc
         if status is not SKIPPED:
             if status is IDLE:
                 self.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
@@ -428,7 +428,7 @@ class TreeNode:
                 except NodeExecutionError:
                     raise
                 except Exception as exc:
-                    raise NodeExecutionError(self.config.path, self.config.registration_id, exc) from exc
+                    raise NodeExecutionError(self.config.path, self.config.registration_id, exc, self.name) from exc
                 if monitor is not None:
                     monitor(self, status, (self.config.clock() - t0) * 1e6)
         if status is SUCCESS or status is FAILURE:
@@ -1032,7 +1032,7 @@ def _is_execute_tick(fast: Callable[[TreeNode], NodeStatus], node: TreeNode) -> 
 
 def _wrap_error(cell: NodeCell, exc: Exception) -> NodeExecutionError:
     config = cell.node.config
-    return NodeExecutionError(config.path, config.registration_id, exc)
+    return NodeExecutionError(config.path, config.registration_id, exc, cell.node.name)
 
 
 def store_child_status(child: TreeNode, status: NodeStatus) -> None:

@@ -158,12 +158,14 @@ class PortType:
     @property
     def has_converter(self) -> bool:
         """Whether BT.CPP gives this type a string converter (``GetAnyFromStringFunctor``): not
-        for untyped ports, nor for enums (NodeStatus included), nor custom types without one.
-        Without it a literal is not checked when the tree is built, and a string written into
-        such a blackboard entry is a type mismatch."""
-        if self.kind in ("enum", "status"):
-            return False
-        return self.kind not in ("any", "anytype", "custom") or self._from_string is not None
+        for untyped ports, nor for enums (NodeStatus included). Without it a literal is not
+        checked when the tree is built, and a string written into such a blackboard entry is a
+        type mismatch. A custom type always has one: without a ``from_string`` it is BT.CPP's
+        generic ``convertFromString<T>``, which throws, so its literals are refused at build.
+        A type known only by its name in a models file (no Python class) is not checked."""
+        if self.kind == "custom":
+            return self.py_type is not None or self._from_string is not None
+        return self.kind not in ("enum", "status", "any", "anytype")
 
     def from_string(self, text: str, enums: dict[str, int] | None = None) -> Any:
         """Convert a string to this type (BT.CPP convertFromString<T>)."""

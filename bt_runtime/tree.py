@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from .errors import LogicError
+from .errors import BTRuntimeError
 from .node import tick_cell
 from .status import FAILURE, IDLE, RUNNING, SUCCESS, NodeStatus
 from .timers import TimerQueue, WakeUpSignal
@@ -56,7 +56,7 @@ class Tree:
     @property
     def root_node(self) -> TreeNode:
         if not self.subtrees or not self.subtrees[0].nodes:
-            raise LogicError("Empty Tree")
+            raise BTRuntimeError("Empty Tree")
         return self.subtrees[0].nodes[0]
 
     @property

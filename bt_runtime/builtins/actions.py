@@ -6,6 +6,7 @@ from __future__ import annotations
 from ..errors import BTRuntimeError, LogicError
 from ..node import ConditionNode, NodeConfig, SyncActionNode
 from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port, type_of_value
+from ..script import compile_node_script
 from ..status import FAILURE, SUCCESS, NodeStatus
 
 
@@ -32,7 +33,7 @@ class _ScriptHolder:
         self._script = None
         raw = self.config.input_ports.get("code")
         if raw is None:
-            raise LogicError(f"Missing port [code] in {self._kind}")
+            raise BTRuntimeError(f"Missing port [code] in {self._kind}")
         self._code_from_blackboard = isinstance(raw, str) and blackboard_key(raw, "code") is not None
         self._load()
 
@@ -44,9 +45,7 @@ class _ScriptHolder:
         if not isinstance(text, str):
             raise BTRuntimeError(f"The port [code] of {self._kind} must contain a string")
         if text != self._code_text:
-            from ..script import compile_script
-
-            self._script = compile_script(text)
+            self._script = compile_node_script(text)
             self._code_text = text
 
 

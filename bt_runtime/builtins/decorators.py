@@ -6,6 +6,7 @@ from __future__ import annotations
 from ..errors import BTRuntimeError, LogicError, NodeExecutionError
 from ..node import DecoratorNode, NodeConfig, _is_execute_tick, _wrap_error, tick_cell
 from ..ports import BOOL, PortInfo, blackboard_key, input_port
+from ..script import compile_node_script
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType, PortDirection
 
 
@@ -239,9 +240,7 @@ class PreconditionNode(DecoratorNode):
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [if] in Precondition") from None
         if text != self._script_text:
-            from ..script import compile_script
-
-            self._script = compile_script(text)
+            self._script = compile_node_script(text)
             self._script_text = text
 
     def tick(self) -> NodeStatus:

@@ -9,7 +9,6 @@ tick itself stays cheap. Errors name the file, line and element.
 
 from __future__ import annotations
 
-import fnmatch
 import re
 import time
 from functools import partial
@@ -18,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from lxml import etree
 
 from ..blackboard import Blackboard, Entry
-from ..errors import BehaviorTreeException, XMLLoadError
+from ..errors import BehaviorTreeException, XMLLoadError, XMLLogicError, located
 from ..node import NodeConfig, TreeNode, TreeNodeManifest
 from ..ports import (
     DOUBLE,
@@ -111,8 +110,9 @@ class TreeBuilder:
 
                 try:
                     target[attr] = compile_script(code)
-                except BehaviorTreeException as exc:
-                    raise self._err(doc, elem, f"{attr}: {exc}") from None
+                except BehaviorTreeException as exc:  # BT.CPP: LogicError("Error in the script ...")
+                    raise XMLLogicError(f"{attr}: {exc}", file=doc.file, line=doc.line_of(elem),
+                                        element=elem.tag) from None
 
     @staticmethod
     def _check_instance_name(name: str) -> str | None:
@@ -149,10 +149,8 @@ class TreeBuilder:
         if uid > 0xFFFF:
             raise XMLLoadError("Too many nodes: uids are 16-bit in BT.CPP (max 65535)")
         path = prefix + name + (f"::{uid}" if name == type_id else "")
-        if factory.substitution_rules:
-            builder, manifest = self._substitute(type_id, name, path, manifest)
-        else:
-            builder = factory.builders[type_id]
+        rule = factory.substitution_for(name, type_id, path) if factory.substitution_rules else None
+        builder = factory.builders[type_id] if rule is None else factory.substitution_builder(rule)
         # self._config(...), inlined: this runs once per node
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
                            self.wake_up, self.timers, self.clock_holder[0], doc.file,
@@ -169,8 +167,8 @@ class TreeBuilder:
             node = builder(name, cfg)
         except XMLLoadError:
             raise
-        except BehaviorTreeException as exc:
-            raise self._err(doc, elem, str(exc)) from None
+        except BehaviorTreeException as exc:  # keeps the class the constructor threw
+            raise located(exc, str(exc), file=doc.file, line=doc.line_of(elem), element=elem.tag) from None
         except Exception as exc:
             raise self._err(doc, elem, f"creating node '{path}' [{type_id}] failed: "
                                        f"{type(exc).__name__}: {exc}") from exc
@@ -181,15 +179,6 @@ class TreeBuilder:
                 if type(child_elem) is ELEMENT or isinstance(child_elem.tag, str):
                     node.add_child(self._build_node(child_elem, doc, record, prefix, stack))
         return node
-
-    def _substitute(self, type_id: str, name: str, path: str,
-                    manifest: TreeNodeManifest) -> tuple[Any, TreeNodeManifest]:
-        factory = self.factory
-        for pattern, rule in factory.substitution_rules:
-            if pattern in (name, type_id) or fnmatch.fnmatchcase(path, pattern):
-                builder, sub_manifest = factory.substitution_builder(rule, manifest)
-                return builder, sub_manifest
-        return factory.builders[type_id], manifest
 
     def _assign_ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str],
                       doc: XMLDocument, elem: etree._Element) -> list[str]:
@@ -250,11 +239,23 @@ class TreeBuilder:
             elif ptype.strongly_typed and ptype.has_converter and port.direction is not PortDirection.OUTPUT:
                 try:
                     ptype.from_string(raw, cfg.enums)
-                except BehaviorTreeException:
-                    raise self._err(doc, elem, f'The port with name "{name}" and value "{raw}" can not be '
-                                               f"converted to {ptype.name}") from None
+                except Exception:  # BT.CPP catches any exception of the converter: LogicError
+                    raise XMLLogicError(f'The port with name "{name}" and value "{raw}" can not be '
+                                        f"converted to {ptype.name}", file=doc.file, line=doc.line_of(elem),
+                                        element=elem.tag) from None
 
     # -- subtrees ------------------------------------------------------------------------------
+    def _build_substituted_subtree(self, rule: Any, name: str, cfg: NodeConfig, attrs: dict[str, str],
+                                   record: SubtreeRecord, doc: XMLDocument, elem: etree._Element) -> TreeNode:
+        cfg.input_ports = {k: v for k, v in attrs.items() if k not in ("ID", "name", "_autoremap")
+                           and is_allowed_port_name(k)}
+        try:
+            node = self.factory.substitution_builder(rule)(name, cfg)
+        except BehaviorTreeException as exc:
+            raise located(exc, str(exc), file=doc.file, line=doc.line_of(elem), element=elem.tag) from None
+        record.nodes.append(node)
+        return node
+
     def _build_subtree(self, elem: etree._Element, doc: XMLDocument, record: SubtreeRecord, prefix: str,
                        stack: list[str]) -> TreeNode:
         sub_id = elem.get("ID")
@@ -276,6 +277,10 @@ class TreeBuilder:
         cfg = self._config(manifest, record.blackboard, uid, path, doc, elem)
         attrs = dict(elem.attrib)
         self._compile_conditions(cfg, attrs, doc, elem)
+        if self.factory.substitution_rules:
+            rule = self.factory.substitution_for(name_attr or sub_id, "SubTree", path)
+            if rule is not None:  # BT.CPP builds the substitute in its place and expands nothing
+                return self._build_substituted_subtree(rule, name_attr or sub_id, cfg, attrs, record, doc, elem)
 
         child_bb = Blackboard(parent=record.blackboard)
         remap: dict[str, str] = {}

@@ -263,13 +263,30 @@ class TreeRegistry:
                 raise self._err(doc, elem, f"The node '{type_id}' must have 1 or more children")
             if type_id == "TryCatch" and len(children) < 2:
                 raise self._err(doc, elem, "The node 'TryCatch' must have at least 2 children")
+            if type_id == "ReactiveSequence":
+                self._check_reactive_children(doc, elem, children)
         if children and node_type in _LEAF_TYPES:
             raise self._err(doc, elem, f"The node '{type_id}' must not have any child")
         for child in children:
             self._check_node(doc, child, depth + 1, elem)
 
+    def _check_reactive_children(self, doc: XMLDocument, elem: etree._Element,
+                                 children: list[etree._Element]) -> None:
+        """BT.CPP 4.10 refuses a ReactiveSequence with more than one asynchronous control child
+        (by element name: an AsyncSequence, or a control registered under one of BT.CPP's
+        asynchronous class names). ReactiveFallback has no such check in 4.10."""
+        manifests = self.factory.manifests
+        async_count = 0
+        for child in children:
+            manifest = manifests.get(child.tag)
+            if manifest is not None and manifest.node_type is _CONTROL and child.tag in _ASYNC_CONTROL_NAMES:
+                async_count += 1
+                if async_count > 1:
+                    raise self._err(doc, elem, "A ReactiveSequence cannot have more than one async child.")
+
 
 _DECORATOR, _CONTROL = NodeType.DECORATOR, NodeType.CONTROL
+_ASYNC_CONTROL_NAMES = frozenset({"AsyncSequence", "ThreadedAction", "StatefulActionNode", "CoroActionNode"})
 _LEAF_TYPES = (NodeType.ACTION, NodeType.CONDITION)
 
 

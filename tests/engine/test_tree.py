@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from bt_runtime import BehaviorTreeFactory, LogicError, NodeStatus, XMLLoadError
+from bt_runtime import BehaviorTreeFactory, BTRuntimeError, NodeStatus, XMLLoadError
 from tests.engine.helpers import doc
 
 S, F, R, IDLE = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING, NodeStatus.IDLE
@@ -228,9 +228,10 @@ def test_create_tree_by_id_and_reregistration(factory):
 
 
 def test_empty_tree_error():
+    """BT.CPP throws RuntimeError("Empty Tree")."""
     from bt_runtime import Tree
 
-    with pytest.raises(LogicError, match="Empty Tree"):
+    with pytest.raises(BTRuntimeError, match="Empty Tree"):
         Tree([], {}, None, None).tick_once()
 
 
