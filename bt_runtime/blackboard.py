@@ -285,12 +285,20 @@ class Blackboard:
                 dst._storage[key] = clone
 
     def debug_message(self) -> str:
+        """Print (as BT.CPP's debugMessage does) and return one line per local entry, with its
+        type and value, and per remapping, with the type of the parent's entry it reaches."""
         lines = []
         for key, entry in self._storage.items():
             lines.append(f"{key} ({entry.type.name}) -> {value_to_string(entry.value)}")
         for internal, external in self._remapping.items():
-            lines.append(f"[{internal}] remapped to port of parent tree [{external}]")
-        return "\n".join(lines)
+            line = f"[{internal}] remapped to port of parent tree [{external}]"
+            target = self.parent.get_entry(external) if self.parent is not None else None
+            if target is not None:
+                line += f" ({target.type.name})"
+            lines.append(line)
+        text = "\n".join(lines)
+        print(text)
+        return text
 
     def to_dict(self, convert: Callable[[Any], Any] | None = None) -> dict[str, Any]:
         """Local entries as plain values (EMPTY -> None); ``convert`` maps each value."""

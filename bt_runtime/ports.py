@@ -196,15 +196,18 @@ class PortType:
                          f"for this type: {self.name}")
 
     def _enum_from_string(self, text: str, enums: dict[str, int] | None) -> Any:
+        """BT.CPP ``TreeNode::parseString`` for enums: a scripting enum, then a number, then the
+        type's own converter (``from_string``; NodeType and PortDirection have BT.CPP's), and
+        only then, where there is none, a member's Python name."""
         cls = self.enum_cls
         if enums and text in enums:
             value = enums[text]
-        elif cls is not None and text in cls.__members__:
-            return cls.__members__[text]
         elif re.fullmatch(r"-?[0-9]+", text):
             value = int(text)
         elif self._from_string is not None:
             return self._from_string(text)
+        elif cls is not None and text in cls.__members__:
+            return cls.__members__[text]
         else:
             raise BTRuntimeError(f"Can't convert string [{text}] to enum {self.name}")
         if cls is not None:
@@ -310,6 +313,12 @@ def port_type(spec: Any) -> PortType:
         _custom_cache[spec] = pt
         return pt
     raise LogicError(f"Unsupported port type: {spec!r}")
+
+
+def convert_from_string(spec: Any, text: str, enums: dict[str, int] | None = None) -> Any:
+    """BT.CPP's ``convertFromString<T>(text)`` for a type as ``input_port`` accepts it (int,
+    float, bool, str, NodeStatus, NodeType, PortDirection, list[...], a user class...)."""
+    return port_type(spec).from_string(text, enums)
 
 
 def type_from_name(name: str) -> PortType:

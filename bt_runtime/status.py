@@ -47,6 +47,12 @@ class NodeType(IntEnum):
                 return value
         return cls.UNDEFINED
 
+    @classmethod
+    def from_string(cls, text: str) -> NodeType:
+        """BT.CPP's ``convertFromString<NodeType>``: "Action", "Condition", ...; anything else
+        is UNDEFINED (never an error)."""
+        return cls.from_xml_name(text)
+
 
 _NODE_TYPE_NAMES = {
     NodeType.ACTION: "Action",
@@ -66,6 +72,26 @@ class PortDirection(IntEnum):
     def xml_tag(self) -> str:
         return ("input_port", "output_port", "inout_port")[self]
 
+    @property
+    def display_name(self) -> str:
+        """BT.CPP's ``toStr(PortDirection)``: "Input", "Output", "InOut"."""
+        return ("Input", "Output", "InOut")[self]
+
+    @classmethod
+    def from_string(cls, text: str) -> PortDirection:
+        """BT.CPP's ``convertFromString<PortDirection>``: "Input"/"INPUT", "Output"/"OUTPUT",
+        "InOut"/"INOUT"; anything else raises BTRuntimeError."""
+        direction = _DIRECTION_NAMES.get(text)
+        if direction is None:
+            from .errors import BTRuntimeError
+
+            raise BTRuntimeError(f"Cannot convert this to PortDirection: {text}")
+        return direction
+
+
+_DIRECTION_NAMES = {"Input": PortDirection.INPUT, "INPUT": PortDirection.INPUT,
+                    "Output": PortDirection.OUTPUT, "OUTPUT": PortDirection.OUTPUT,
+                    "InOut": PortDirection.INOUT, "INOUT": PortDirection.INOUT}
 
 IDLE = NodeStatus.IDLE
 RUNNING = NodeStatus.RUNNING

@@ -230,3 +230,17 @@ def test_external_root_blackboard():
     tree = factory.create_tree_from_text(doc('<Script code="seen := limit"/>'), blackboard=shared)
     tree.tick_once()
     assert tree.root_blackboard is shared and shared.get("seen") == 3
+
+
+def test_debug_message_shows_the_type_of_remapped_entries(capsys):
+    from bt_runtime import Blackboard
+
+    parent = Blackboard()
+    parent.set("parent_value", 42)
+    child = Blackboard(parent=parent)
+    child.add_subtree_remapping("local_name", "parent_value")
+    child.add_subtree_remapping("dangling", "nowhere")
+    text = child.debug_message()
+    assert "[local_name] remapped to port of parent tree [parent_value] (int)" in text
+    assert text.endswith("[dangling] remapped to port of parent tree [nowhere]")  # no entry: no type
+    assert capsys.readouterr().out.strip() == text  # printed, as BT.CPP's debugMessage
