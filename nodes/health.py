@@ -103,7 +103,9 @@ class RestartComponent(AsyncActionNode):
 
 
 class WaitForHealthy(StatefulActionNode):
-    """RUNNING until the listed components are OK; FAILURE after ``timeout`` s or if one is DEAD."""
+    """RUNNING until the listed components are OK; FAILURE after ``timeout`` s or if one is DEAD.
+    A component not heard from yet (UNKNOWN) is not OK: a goal waits for localization and the
+    planner to report instead of failing (and restarting the planner) at start-up."""
 
     @classmethod
     def provided_ports(cls):
@@ -117,7 +119,7 @@ class WaitForHealthy(StatefulActionNode):
     def on_running(self):
         sup = self.context.supervisor
         states = [sup.health(n) for n in _names(self)]
-        if all(s is Health.OK or s is Health.UNKNOWN for s in states):
+        if all(s is Health.OK for s in states):
             return SUCCESS
         if any(s is Health.DEAD for s in states) or self.context.clock() > self._deadline:
             return FAILURE

@@ -14,16 +14,19 @@ import contextlib
 import json
 import math
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 from ..errors import BehaviorTreeException
 from ..runtime.messages import Pose2D
+from .progress import ProgressLine, SharedConsole
 from .registration import RegistrationError, add_registration_arguments
 from .registration import registrations as node_registrations
+from .run_goals import mark_unfinished, outcomes_for, send_goals, uses_goal_handoff
+from .summary import EXIT_INTERRUPTED, EXIT_USAGE, format_summary, summary_dict, verdict
+from .summary import EXIT_OK as EXIT_OK  # re-exported for callers
 
-EXIT_OK, EXIT_TREE_FAILED, EXIT_USAGE = 0, 1, 2
+EXIT_TREE_FAILED = 1  # see summary.verdict: a goal not reached, FAILURE, or ticks that raised
 
 
 class UsageError(Exception):
@@ -37,8 +40,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--world", default="apartment", help="apartment | round_obstacles | a world YAML file")
     p.add_argument("--robot", default="burger", help="burger | waffle | rosbot2 | a profile YAML file")
     p.add_argument("--goal", action="append", default=[], metavar="X,Y[,YAW]",
-                   help="goal pose (repeatable; write --goal=-1,2 for negative x) or a goal name of the "
-                        "world; goals are handed to the tree one after the other")
+                   help="goal pose in metres, YAW in radians (repeatable; write --goal=-1,2 for negative x) "
+                        "or a goal name of the world; goals are handed to the tree one after the other")
+    p.add_argument("--tree", dest="tree_id", default=None, metavar="ID",
+                   help="the BehaviorTree ID to run (default: main_tree_to_execute, or the only tree)")
+    p.add_argument("--png", type=Path, default=None, metavar="FILE",
+                   help="draw the run at the end: map, trajectory, goals, collisions, faults, marks")
+    p.add_argument("--ready-timeout", type=float, default=10.0, metavar="S",
+                   help="wait up to S s (robot time) for every component to report before the tree "
+                        "starts and gets its goals (default 10)")
     p.add_argument("--duration", type=float, default=None, metavar="S",
                    help="stop after S seconds of robot time (default: when the tree completes)")
     p.add_argument("--seed", type=int, default=0)
@@ -139,81 +149,18 @@ def make_driver(args: argparse.Namespace):
 # the run
 # ---------------------------------------------------------------------------------------------
 
-class ProgressLine:
-    """One status line, refreshed at most every ``interval`` wall seconds."""
-
-    def __init__(self, runtime: Any, stream=sys.stderr, interval: float = 0.25):
-        self.runtime = runtime
-        self.stream = stream
-        self.interval = interval
-        self._last = 0.0
-        self._wall0 = time.perf_counter()
-        self._sim0 = runtime.clock()
-        self.printed = False
-
-    def line(self) -> str:
-        rt = self.runtime
-        sim_t = rt.clock() - self._sim0
-        wall = time.perf_counter() - self._wall0
-        rtf = sim_t / wall if wall > 0 else 0.0
-        pose = rt.backup.latest("pose")
-        pose_txt = (f"({pose.pose.x:+.2f}, {pose.pose.y:+.2f}, {math.degrees(pose.pose.yaw):+4.0f}deg)"
-                    if pose is not None else "(no pose)")
-        bad = rt.supervisor.unhealthy()
-        health = "OK" if not bad else "! " + ",".join(f"{n}:{rt.supervisor.health(n).value}" for n in bad)
-        status = rt.tick_loop.status.name if rt.tick_loop else "-"
-        return (f"t={sim_t:7.2f}s  x{rtf:6.1f}  pose={pose_txt}  tree={status:<8} gate={rt.gate.source:<7} "
-                f"health={health}")
-
-    def maybe_print(self) -> None:
-        now = time.perf_counter()
-        if now - self._last < self.interval:
-            return
-        self._last = now
-        self.stream.write("\r" + self.line()[:160].ljust(160))
-        self.stream.flush()
-        self.printed = True
-
-    async def run(self) -> None:
-        while True:
-            await asyncio.sleep(0.05)  # loop time: cheap when idle, frequent enough in real time
-            self.maybe_print()
-
-    def finish(self) -> None:
-        if self.printed:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def format_summary(summary: Any, runtime: Any) -> str:
-    s = summary
-    pose = runtime.backup.latest("pose")
-    lines = [
-        f"tree: {s.status} ({'completed' if s.completed else 'not completed'})",
-        f"time: {s.sim_time:.2f} s robot time in {s.wall_time:.2f} s wall (x{s.real_time_factor:.1f})",
-        f"ticks: {s.ticks}  errors: {s.tick_errors}  overruns: {s.overruns}  "
-        f"tick cost mean {s.tick_cost_mean_ms * 1e3:.1f} us, p99 {s.tick_cost_p99_ms * 1e3:.1f} us  "
-        f"lateness p50 {s.lateness_p50_ms * 1e3:.1f} us, p99 {s.lateness_p99_ms * 1e3:.1f} us",
-        "health: " + ", ".join(f"{k}={v}" for k, v in s.health.items()),
-        f"supervisor events: {s.supervisor_events}  gate switches: {s.gate_switches}"
-        + (f"  e-stop: {', '.join(s.estop_reasons)}" if s.estop_reasons else ""),
-    ]
-    if pose is not None:
-        lines.append(f"final pose: x={pose.pose.x:.2f} y={pose.pose.y:.2f} yaw={math.degrees(pose.pose.yaw):.0f}deg")
-    outcomes = getattr(s, "goal_outcomes", None)
-    if outcomes:
-        lines.append("goals: " + ", ".join(outcomes))
-    return "\n".join(lines)
-
-
-async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any,
-                     registrations: list, show_progress: bool, holder: dict[str, Any]) -> tuple[Any, int]:
+async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, registrations: list,
+                     console: SharedConsole | None, held: dict[str, Any]) -> None:
+    """The run itself; everything the summary needs goes into ``held`` as it becomes known
+    (so an interrupted run still reports what it did)."""
     from ..runtime.app import AutonomyRuntime
+    from ..runtime.explain import FailureWitness
+    from ..runtime.readiness import wait_until_reported
 
     driver = make_driver(args)
     runtime = AutonomyRuntime(driver, config, realtime=args.realtime or None, register=registrations)
     try:
-        runtime.load_tree(tree_path)
+        runtime.load_tree(tree_path, tree_id=args.tree_id)
     except BehaviorTreeException as exc:
         raise UsageError(str(exc)) from None
     world = getattr(getattr(driver, "sim", None), "world", None)
@@ -222,76 +169,72 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any,
     for assignment in args.set:
         key, value = parse_assignment(assignment)
         bb.set(key, value)
-    progress = ProgressLine(runtime) if show_progress else None
+    handoff = uses_goal_handoff(runtime.tree)
+    outcomes = outcomes_for(goals)
+    witness = FailureWitness.attach(runtime)
+    picture = None
+    if args.png is not None:
+        from .run_picture import RunPicture
+
+        picture = RunPicture.attach(runtime, args.world)
+    held.update(runtime=runtime, goals=outcomes, witness=witness, handoff=handoff, picture=picture,
+                notes=[], goal_poses=goals)
+    progress = ProgressLine(runtime, console) if console is not None else None
     from groot.cli import Monitoring
 
     monitoring = await Monitoring.from_args(runtime.tree, args).start()
-    await runtime.start()
+    await runtime.start(tick=False)
     progress_task = asyncio.get_running_loop().create_task(progress.run()) if progress else None
-    outcomes: list[str] = []
-    try:
+    t0 = runtime.clock()
+
+    async def body() -> None:
+        ready = await wait_until_reported(runtime.supervisor, runtime.clock, args.ready_timeout)
+        if not ready.ready:
+            note = f"start-up: {ready.describe()} after {ready.waited:.1f} s; starting anyway"
+            held["notes"].append(note)
+            _say(console, f"warning: {note}")
         if goals:
-            await asyncio.wait_for(_send_goals(runtime, goals, outcomes), args.duration)
-            summary = runtime.summary()
-        else:
-            summary = await runtime.run(duration=args.duration)
+            await send_goals(runtime, goals, outcomes, witness)
+            return
+        runtime.restart_tree()
+        if handoff:
+            hint = ("the tree is waiting for a goal: pass --goal X,Y[,YAW] (metres, radians)"
+                    + (f" or a goal name ({', '.join(sorted(world.goals))})" if world is not None and world.goals
+                       else ""))
+            held["notes"].append(hint)
+            _say(console, hint)
+        await asyncio.shield(runtime.completed)
+
+    try:
+        remaining = None if args.duration is None else max(0.0, args.duration - (runtime.clock() - t0))
+        await asyncio.wait_for(body(), remaining)
     except TimeoutError:
-        summary = runtime.summary()
+        pass
     finally:
+        mark_unfinished(outcomes, runtime, witness, args.duration)
         if progress_task is not None:
             progress_task.cancel()
             progress.maybe_print()
             progress.finish()
-        holder["summary"], holder["runtime"] = runtime.summary(), runtime  # kept if interrupted
+        held["summary"] = runtime.summary()
         await runtime.stop()
+        witness.detach()
         await monitoring.stop()
-    summary.goal_outcomes = outcomes
-    failed = summary.status == "FAILURE" or any(o not in ("SUCCEEDED", "SUCCESS") for o in outcomes)
-    return (summary, runtime), EXIT_TREE_FAILED if failed else EXIT_OK
 
 
-HANDOFF_DONE = ("SUCCEEDED", "ABORTED", "REFUSED")
+def _say(console: SharedConsole | None, text: str) -> None:
+    """A message for the person at the terminal (never over the progress line)."""
+    (console or sys.stderr).write(text + "\n")
 
 
-async def _send_goals(runtime: Any, goals: list[Pose2D], outcomes: list[str]) -> None:
-    """Hand the goals to the tree one after the other.
-
-    A tree that runs continuously and uses the goal hand-off (``{goal_status}``, like
-    trees/autonomy.xml) gets each goal when the previous one is SUCCEEDED / ABORTED /
-    REFUSED; a tree that completes per goal (like Nav2's, trees/navigation.xml) is run once
-    per goal.
-    """
-    bb = runtime.tree.root_blackboard
-    handoff = "goal_status" in _port_keys(runtime.tree)
-    for goal in goals:
-        bb.set("goal", goal)
-        bb.set("goals", [goal])
-        if handoff:
-            bb.set("goal_status", "PENDING")
-            while bb.get("goal_status", default="") not in HANDOFF_DONE:
-                if runtime.completed.done():
-                    outcomes.append(runtime.completed.result().name)
-                    return
-                await asyncio.sleep(0.05)
-            outcomes.append(bb.get("goal_status"))
-        else:
-            done = runtime.completed if not runtime.completed.done() else runtime.restart_tree()
-            outcomes.append((await done).name)
-            if goal is not goals[-1]:
-                runtime.restart_tree()
-
-
-def _port_keys(tree: Any) -> set[str]:
-    """Blackboard keys the tree's ports refer to (to see whether it uses the goal hand-off)."""
-    from ..ports import blackboard_key
-
-    keys = set()
-    for node in tree.nodes():
-        for name, raw in {**node.config.input_ports, **node.config.output_ports}.items():
-            key = blackboard_key(raw, name) if isinstance(raw, str) else None
-            if key:
-                keys.add(key.lstrip("@"))
-    return keys
+def _last_error(runtime: Any) -> str | None:
+    """The error of the tick loop's last tick, if that tick raised (with the node's path)."""
+    loop = runtime.tick_loop
+    exc = getattr(loop, "last_error", None) if loop is not None else None
+    if exc is None or loop.status.name != "IDLE":
+        return None
+    path = getattr(exc, "node_path", None)
+    return f"{type(exc).__name__} in {path}: {exc}" if path else f"{type(exc).__name__}: {exc}"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -303,39 +246,64 @@ def run(args: argparse.Namespace) -> int:
         print(f"error: tree file not found: {tree_path}", file=sys.stderr)
         return EXIT_USAGE
     log_file = None
+    show_progress = not args.no_progress and not args.log_json and sys.stderr.isatty()
+    console = SharedConsole(sys.stderr) if show_progress else None
+    held: dict[str, Any] = {}
+    interrupted = False
     try:
         if args.log_json:
             configure_logging(json=True, stream=sys.stdout, level=args.log_level)
         elif args.log_file is not None:
             log_file = configure_logging(file=args.log_file, level=args.log_level)
         else:
-            configure_logging(json=False, stream=sys.stderr, level="warning")
+            configure_logging(json=False, stream=console or sys.stderr, level="warning")
         config = load_config(args.config)
         try:
             registrations = node_registrations(args)
         except RegistrationError as exc:
             raise UsageError(str(exc)) from None
-        show_progress = not args.no_progress and not args.log_json and sys.stderr.isatty()
         virtual = args.driver == "sim" and not args.realtime
-        holder: dict[str, Any] = {}
         try:
-            (summary, runtime), code = run_loop(
-                _run_async(args, tree_path, config, registrations, show_progress, holder), virtual=virtual)
+            run_loop(_run_async(args, tree_path, config, registrations, console, held), virtual=virtual)
         except KeyboardInterrupt:
-            if "summary" not in holder:
-                print("interrupted", file=sys.stderr)
-                return 130
-            summary, runtime, code = holder["summary"], holder["runtime"], 130
             print("interrupted", file=sys.stderr)
+            if "summary" not in held:
+                return EXIT_INTERRUPTED
+            interrupted = True
     except UsageError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     finally:
         if log_file is not None:
             log_file.close()
+    return report(args, held, interrupted)
+
+
+def report(args: argparse.Namespace, held: dict[str, Any], interrupted: bool) -> int:
+    """Print the summary, write --summary-json and --png; the exit code."""
+    runtime, summary, goals = held["runtime"], held["summary"], held["goals"]
+    last_error = _last_error(runtime)
+    result = verdict(summary, goals, last_error, interrupted)
+    summary.goal_outcomes = [g.outcome for g in goals]
+    extra = list(held["notes"])
+    if summary.tick_errors:
+        why = held["witness"]
+        extra.append(f"tick errors: {summary.tick_errors}"
+                     + (f"; last: {last_error}" if last_error else "")
+                     + (f"; last failing node {why.last_node_failure().path}" if why.last_node_failure() else ""))
+    if held.get("picture") is not None:
+        title = f"{Path(args.tree).name} on {args.world}: " + (", ".join(
+            f"goal {i} {g.outcome}" for i, g in enumerate(goals)) or "no goal")
+        try:
+            png = held["picture"].write(args.png, held["goal_poses"], title)
+            extra.append(f"picture: {png}")
+        except Exception as exc:  # a picture that cannot be drawn must not hide the summary
+            extra.append(f"picture not written: {exc}")
     out = sys.stderr if args.log_json else sys.stdout
     with contextlib.suppress(BrokenPipeError):
-        print(format_summary(summary, runtime), file=out)
+        print(format_summary(summary, runtime, goals, result, uses_goal_handoff=held["handoff"], extra=extra),
+              file=out)
     if args.summary_json is not None:
-        args.summary_json.write_text(json.dumps(summary.__dict__, indent=2, default=str), encoding="utf-8")
-    return code
+        data = summary_dict(summary, goals, result, notes=held["notes"], last_error=last_error)
+        args.summary_json.write_text(json.dumps(data, indent=2, default=str), encoding="utf-8")
+    return result.code

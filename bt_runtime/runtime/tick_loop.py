@@ -100,6 +100,7 @@ class TickLoop:
         self.last_error: BaseException | None = None
         self.on_tick: list[Callable[[NodeStatus], Any]] = []
         self._error_latched = False
+        self._last_error_key: tuple | None = None
 
     @property
     def period(self) -> float:
@@ -169,8 +170,12 @@ class TickLoop:
         self.stats.errors += 1
         self.last_error = exc
         node = exc.node_path if isinstance(exc, NodeExecutionError) else None
+        # the traceback once per distinct error: a tree that raises on every tick must not flood the log
+        key = (node, type(exc).__name__, str(exc))
+        repeated = key == self._last_error_key
+        self._last_error_key = key
         log.error("tick_error", node=node, error=str(exc), error_type=type(exc).__name__,
-                  sim_time=round(self.tree.clock(), 3))
+                  sim_time=round(self.tree.clock(), 3), repeated=repeated, exc_info=None if repeated else exc)
         if self.gate is not None:
             self.gate.emergency_stop(TICK_ERROR)
             self._error_latched = True
