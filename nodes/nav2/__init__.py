@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from . import actions, conditions, control, decorators, path_ops, unavailable
+from . import actions, conditions, control, decorators, path_ops, services, unavailable
 from .common import publish, publish_stamped
 
 if TYPE_CHECKING:
@@ -83,11 +83,11 @@ NAV2_NODES: dict[str, type] = {
     "CancelDriveOnHeading": actions.CancelDriveOnHeading,
     "CancelWait": actions.CancelWait,
     # services
-    "ClearEntireCostmap": actions.ClearEntireCostmap,
-    "ClearCostmapAroundRobot": actions.ClearCostmapAroundRobot,
-    "ClearCostmapExceptRegion": actions.ClearCostmapExceptRegion,
-    "ClearCostmapAroundPose": actions.ClearCostmapAroundPose,
-    "ValidatePath": actions.ValidatePath,
+    "ClearEntireCostmap": services.ClearEntireCostmap,
+    "ClearCostmapAroundRobot": services.ClearCostmapAroundRobot,
+    "ClearCostmapExceptRegion": services.ClearCostmapExceptRegion,
+    "ClearCostmapAroundPose": services.ClearCostmapAroundPose,
+    "ValidatePath": services.ValidatePath,
     # selectors
     "PlannerSelector": actions.PlannerSelector,
     "ControllerSelector": actions.ControllerSelector,

@@ -1,19 +1,7 @@
-"""Nav2's action- and service-client nodes on the project's navigation client.
+"""Nav2's action-client nodes on the project's navigation client: planner, controller,
+behaviours, navigator, the cancel nodes and the selectors. Their mechanics live in ``bases.py``.
 
-``BtActionNode`` reproduces ``nav2_behavior_tree::BtActionNode``: the first tick of an
-activation reads the ports (``on_tick``) and sends the goal, and the node returns RUNNING
-until the result is in. SUCCEEDED -> ``on_success`` (SUCCESS), ABORTED -> ``on_aborted``
-(FAILURE, the server's error code on ``error_code_id``), **CANCELED -> ``on_cancelled``
-(SUCCESS)**. While running, ``on_wait_for_result`` may change the goal (FollowPath does when
-``{path}`` changes) and the goal is re-sent. Halting a running node cancels its goal (and
-calls ``on_cancelled``, as Nav2 does, so outputs such as the path are written).
-
-``BtServiceNode`` reproduces ``BtServiceNode``: the request goes out on the first tick; SUCCESS
-when the response arrives, FAILURE when it does not within ``server_timeout`` (ms; port, else
-the blackboard's ``server_timeout``, else bt_navigator's 20 ms) or when the call fails.
-
-Goals go to ``context.navigation`` (``NavigationClient``: ``sim.nav.NavStack`` in simulation);
-the ticks never await: coroutines (planning, costmap services) run as tasks that are polled.
+Goals go to ``context.navigation`` (``NavigationClient``: ``sim.nav.NavStack`` in simulation).
 Behaviour error codes are mapped to the per-action Nav2 codes (the stack reports the generic
 700 range: BackUp 710-714, DriveOnHeading 720-724, Wait 740).
 """
@@ -22,234 +10,28 @@ from __future__ import annotations
 
 import asyncio
 import math
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
-from bt_runtime.errors import LogicError
-from bt_runtime.node import NodeConfig, StatefulActionNode, SyncActionNode
+from bt_runtime.node import SyncActionNode
 from bt_runtime.ports import BOOL, DOUBLE, INT, STRING, input_port, output_port
 from bt_runtime.runtime.messages import ActionStatus, NavErrorCode, NavResult, Path, Pose2D, wrap_angle
-from bt_runtime.status import FAILURE, RUNNING, SUCCESS, NodeStatus
+from bt_runtime.status import FAILURE, SUCCESS, NodeStatus
 
 from ..robot import navigation, robot_pose
-from ..types import (
-    ERROR_CODE,
-    GOALS,
-    PATH,
-    POSE,
-    SERVER_TIMEOUT,
-    STRING_LIST,
-    TRACKING_FEEDBACK,
-    TrackingFeedback,
-    empty_path,
+from ..types import GOALS, PATH, POSE, TRACKING_FEEDBACK, TrackingFeedback, empty_path
+from .bases import (
+    NONE,
+    BtActionNode,
+    BtCancelActionNode,
+    SelectorNode,
+    error_ports,
+    safe_set_output,
+    server_ports,
+    start_task,
 )
-from .common import (
-    closest_index,
-    increment_recovery_count,
-    is_empty,
-    log,
-    points_of,
-    same_path,
-    server_timeout,
-)
-
-NONE = 0
-
-
-def server_ports(default_server: str, service: bool = False) -> list:
-    kind = "Service" if service else "Action server"
-    return [input_port("server_name", STRING, description=f"{kind} name. If not specified, "
-                                                            f"`{default_server}` is used."),
-            input_port("server_timeout", SERVER_TIMEOUT,
-                       description=f"{kind} timeout (ms). If not provided, uses the BT Navigator's "
-                                   "`default_server_timeout` (20 ms)")]
-
-
-def error_ports(what: str) -> list:
-    return [output_port("error_code_id", ERROR_CODE, description=f"{what} error code"),
-            output_port("error_msg", STRING, description=f"{what} error message")]
-
-
-def safe_set_output(node: Any, name: str, value: Any) -> None:
-    """Write an output if the XML remaps it to a blackboard entry (BT.CPP's setOutput returns
-    an error, it does not throw, when the port is not connected)."""
-    raw = node.config.output_ports.get(name)
-    if raw is None:
-        return
-    s = raw.strip()
-    if raw in ("=", "{=}") or (len(s) >= 3 and s[0] == "{" and s[-1] == "}"):
-        node.set_output(name, value)
-
-
-def _running_loop(node: Any) -> asyncio.AbstractEventLoop:
-    try:
-        return asyncio.get_running_loop()
-    except RuntimeError:
-        raise LogicError(f"'{node.config.path}' [{node.registration_name}] needs a running asyncio event loop "
-                         "(run the tree with the runtime or tick_while_running_async)") from None
-
-
-class TaskHandle:
-    """A coroutine of the navigation client (planning, a costmap service) as a handle."""
-
-    __slots__ = ("task", "cancel_requested")
-
-    def __init__(self, task: asyncio.Task):
-        self.task = task
-        self.cancel_requested = False
-
-    def done(self) -> bool:
-        return self.task.done()
-
-    def cancel(self) -> None:
-        if not self.task.done():
-            self.cancel_requested = True
-            self.task.cancel()
-
-    def result(self) -> NavResult:
-        task = self.task
-        if task.cancelled():
-            return NavResult(ActionStatus.CANCELED, NavErrorCode.NONE, "canceled")
-        exc = task.exception()
-        if exc is not None:
-            return NavResult(ActionStatus.ABORTED, NavErrorCode.NONE, f"{type(exc).__name__}: {exc}")
-        value = task.result()
-        if isinstance(value, NavResult):
-            return value
-        return NavResult(ActionStatus.SUCCEEDED)
-
-    @property
-    def feedback(self) -> Any:
-        return None
-
-
-def start_task(node: Any, coro: Any) -> TaskHandle:
-    loop = _running_loop(node)
-    return TaskHandle(loop.create_task(coro, name=f"bt:{node.config.path}"))
-
-
-def _goal_registry(node: Any) -> dict[str, set]:
-    extras = getattr(node.context, "extras", None)
-    if extras is None:
-        return {}
-    return extras.setdefault("nav2_goals", {})
-
-
-# ---------------------------------------------------------------------------------------------
-# BtActionNode
-# ---------------------------------------------------------------------------------------------
-
-class BtActionNode(StatefulActionNode):
-    """Base of the Nav2 action-client nodes (see the module docstring)."""
-
-    server: ClassVar[str] = ""  # Nav2's default action name (also the cancel-node registry key)
-    code_map: ClassVar[dict[int, int]] = {}  # stack error code -> this action's Nav2 code
-
-    def __init__(self, name: str, config: NodeConfig | None = None):
-        self.handle: Any = None
-        self.goal: dict[str, Any] = {}
-        self.goal_updated = False
-        self.should_send_goal = True
-        super().__init__(name, config)
-
-    # -- hooks (Nav2's names) --------------------------------------------------------------------
-    def on_tick(self) -> None:
-        """Read the ports into ``self.goal``; set ``should_send_goal = False`` to fail."""
-
-    def send_goal(self) -> Any:
-        raise NotImplementedError
-
-    def update_goal(self) -> None:
-        """The goal changed while running: re-send it (Nav2 send_new_goal)."""
-        self._send()
-
-    def on_wait_for_result(self) -> None:
-        """Called each tick while waiting; may set ``goal_updated``."""
-
-    def on_success(self, result: NavResult) -> NodeStatus:
-        safe_set_output(self, "error_code_id", NONE)
-        safe_set_output(self, "error_msg", "")
-        return SUCCESS
-
-    def on_aborted(self, result: NavResult) -> NodeStatus:
-        safe_set_output(self, "error_code_id", self.map_code(result.error_code))
-        safe_set_output(self, "error_msg", result.error_msg)
-        return FAILURE
-
-    def on_cancelled(self) -> NodeStatus:
-        safe_set_output(self, "error_code_id", NONE)
-        safe_set_output(self, "error_msg", "")
-        return SUCCESS
-
-    def map_code(self, code: int) -> int:
-        code = int(code)
-        return self.code_map.get(code, code)
-
-    # -- mechanics ---------------------------------------------------------------------------------
-    def _send(self) -> None:
-        old = self.handle
-        self.handle = self.send_goal()
-        reg = _goal_registry(self)
-        if reg is not None and self.server:
-            goals = reg.setdefault(self.server, set())
-            if old is not None:
-                goals.discard(old)
-            goals.add(self.handle)
-
-    def _forget(self) -> None:
-        reg = _goal_registry(self)
-        if self.handle is not None and self.server in reg:
-            reg[self.server].discard(self.handle)
-        self.handle = None
-
-    def on_start(self) -> NodeStatus:
-        self.should_send_goal = True
-        self.goal_updated = False
-        self.goal = {}
-        self.on_tick()
-        if not self.should_send_goal:
-            return FAILURE
-        try:
-            self._send()
-        except LogicError:
-            raise
-        except Exception as exc:  # Nav2: "send_goal failed" -> FAILURE
-            log.warning("nav2_send_goal_failed", node=self.config.path, error=f"{type(exc).__name__}: {exc}")
-            self.handle = None
-            return FAILURE
-        return self._poll()
-
-    def on_running(self) -> NodeStatus:
-        return self._poll()
-
-    def _poll(self) -> NodeStatus:
-        handle = self.handle
-        if handle is None:
-            return FAILURE
-        if not handle.done():
-            self.on_wait_for_result()
-            if self.goal_updated:
-                self.goal_updated = False
-                self.update_goal()
-                handle = self.handle
-            if not handle.done():
-                return RUNNING
-        result = handle.result()
-        self._forget()
-        if result.status is ActionStatus.SUCCEEDED:
-            return self.on_success(result)
-        if result.status is ActionStatus.ABORTED:
-            return self.on_aborted(result)
-        return self.on_cancelled()
-
-    def on_halted(self) -> None:
-        handle = self.handle
-        if handle is not None and not handle.done():
-            handle.cancel()
-            self.on_cancelled()
-        self._forget()
-
+from .common import closest_index, increment_recovery_count, is_empty, log, points_of, same_path
 
 # ---------------------------------------------------------------------------------------------
 # Planner server
@@ -721,26 +503,8 @@ class NavigateThroughPoses(BtActionNode):
 
 
 # ---------------------------------------------------------------------------------------------
-# Cancel nodes (BtCancelActionNode)
+# Cancel nodes
 # ---------------------------------------------------------------------------------------------
-
-class BtCancelActionNode(SyncActionNode):
-    """Cancels every goal this tree's Nav2 nodes sent to the action server (Nav2 cancels all
-    goals of the server sent more than 10 ms ago). SUCCESS (also when nothing runs)."""
-
-    server: ClassVar[str] = ""
-
-    @classmethod
-    def provided_ports(cls):
-        return server_ports(cls.server)
-
-    def tick(self) -> NodeStatus:
-        self.set_status(RUNNING)
-        for handle in list(_goal_registry(self).get(self.server, ())):
-            if not handle.done():
-                handle.cancel()
-        return SUCCESS
-
 
 class CancelControl(BtCancelActionNode):
     """Cancels the controller server's FollowPath goals."""
@@ -773,220 +537,8 @@ class CancelWait(BtCancelActionNode):
 
 
 # ---------------------------------------------------------------------------------------------
-# Services
+# Selectors
 # ---------------------------------------------------------------------------------------------
-
-class BtServiceNode(StatefulActionNode):
-    """Base of the Nav2 service-client nodes (see the module docstring)."""
-
-    service: ClassVar[str] = ""
-
-    def __init__(self, name: str, config: NodeConfig | None = None):
-        self.future: TaskHandle | None = None
-        self.sent_time = 0.0
-        self.timeout = 0.02
-        self.should_send_request = True
-        super().__init__(name, config)
-
-    def on_tick(self) -> None:
-        """Fill the request; set ``should_send_request = False`` to fail."""
-
-    def call(self) -> Any:
-        """The coroutine (or plain value) that serves the request."""
-        raise NotImplementedError
-
-    def on_completion(self, response: Any) -> NodeStatus:
-        return SUCCESS
-
-    def on_start(self) -> NodeStatus:
-        self.should_send_request = True
-        self.on_tick()
-        if not self.should_send_request:
-            return FAILURE
-        self.timeout = server_timeout(self)
-        try:
-            result = self.call()
-        except LogicError:
-            raise
-        except Exception as exc:
-            log.warning("nav2_service_failed", node=self.config.path, error=f"{type(exc).__name__}: {exc}")
-            return FAILURE
-        if asyncio.iscoroutine(result):
-            self.future = start_task(self, result)
-            self.sent_time = self.config.clock()
-            return self.check_future()
-        return self.on_completion(result)
-
-    def on_running(self) -> NodeStatus:
-        return self.check_future()
-
-    def check_future(self) -> NodeStatus:
-        future = self.future
-        if future is None:
-            return FAILURE
-        if future.done():
-            self.future = None
-            task = future.task
-            if task.cancelled() or task.exception() is not None:
-                exc = None if task.cancelled() else task.exception()
-                log.warning("nav2_service_failed", node=self.config.path,
-                            error=f"{type(exc).__name__}: {exc}" if exc else "cancelled")
-                return FAILURE
-            return self.on_completion(task.result())
-        if self.config.clock() - self.sent_time < self.timeout:
-            return RUNNING
-        log.warning("nav2_service_timeout", node=self.config.path, service=self.service,
-                    timeout_ms=round(self.timeout * 1000))
-        future.cancel()
-        self.future = None
-        return FAILURE
-
-    def on_halted(self) -> None:
-        if self.future is not None:
-            self.future.cancel()
-            self.future = None
-
-
-def _which_costmap(service_name: str) -> str:
-    name = service_name or ""
-    if "local" in name:
-        return "local"
-    if "global" in name:
-        return "global"
-    return "both"
-
-
-class ClearEntireCostmap(BtServiceNode):
-    """Clears a costmap's sensor data (``<costmap>/clear_entirely_<costmap>``): local or global
-    by ``service_name``, both if the name says neither. Counts as a recovery. ``plugins``
-    (Nav2 main: clear only some layers) is accepted; every obstacle layer is cleared."""
-
-    service = "clear_entirely_costmap"
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("service_name", STRING, description="Service name"),
-                input_port("plugins", STRING_LIST, description="List of specific plugins to clear. If "
-                                                                "empty, all plugins are cleared."),
-                input_port("server_timeout", SERVER_TIMEOUT,
-                           description="Server timeout (ms). If not provided, uses the BT Navigator's "
-                                       "`default_server_timeout` (20 ms)")]
-
-    def on_tick(self) -> None:
-        increment_recovery_count(self)
-
-    def call(self) -> Any:
-        return navigation(self).clear_costmaps(_which_costmap(self.get_input("service_name", "") or ""))
-
-
-class ClearCostmapAroundRobot(ClearEntireCostmap):
-    """Nav2 clears the obstacle data within ``reset_distance`` of the robot; the navigation
-    client can only clear a whole costmap's sensor data, which this does (a superset)."""
-
-    service = "clear_around_costmap"
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("reset_distance", DOUBLE, 1.0, "Distance from the robot to clear"),
-                *super().provided_ports()]
-
-
-class ClearCostmapExceptRegion(ClearEntireCostmap):
-    """Nav2 clears the obstacle data outside ``reset_distance`` of the robot; the client
-    clears the whole costmap's sensor data (a superset)."""
-
-    service = "clear_except_costmap"
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("reset_distance", DOUBLE, 1.0, "Distance from the robot to keep"),
-                *super().provided_ports()]
-
-
-class ClearCostmapAroundPose(ClearEntireCostmap):
-    """Nav2 clears the obstacle data within ``reset_distance`` of ``pose``; the client clears
-    the whole costmap's sensor data (a superset)."""
-
-    service = "clear_around_pose"
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("pose", POSE, description="Pose around which to clear"),
-                input_port("reset_distance", DOUBLE, 1.0, "Distance from the pose to clear"),
-                *super().provided_ports()]
-
-
-class ValidatePath(BtServiceNode):
-    """Nav2 main's path check (planner server ``is_path_valid``): SUCCESS if ``path`` from
-    the pose closest to the robot on is free. ``max_cost`` as Nav2 (254 = lethal only), capped
-    at 253 (inscribed) because the robot footprint is a circle, as Nav2 does for a
-    ``robot_radius`` costmap. ``layer_name``, ``footprint``, ``max_lookahead_distance`` and
-    ``collision_poses`` are not supported by the client (accepted, ignored)."""
-
-    service = "is_path_valid"
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("path", PATH, description="Path to validate"),
-                input_port("max_cost", "unsigned int", 254, "Maximum cost allowed for a pose"),
-                input_port("consider_unknown_as_obstacle", BOOL, False, "Unknown cells are obstacles"),
-                input_port("layer_name", STRING, "", "Costmap layer to check (empty: master costmap)"),
-                input_port("footprint", STRING, "", "Footprint to check (empty: the robot's)"),
-                input_port("stop_at_first_collision", BOOL, True, "Stop at the first pose in collision"),
-                input_port("max_lookahead_distance", DOUBLE, -1.0,
-                           "Maximum distance along the path to check (negative: all)"),
-                output_port("collision_poses", GOALS, description="Poses of the path in collision"),
-                *server_ports("is_path_valid", service=True)]
-
-    def on_tick(self) -> None:
-        self.path = self.get_input("path", None)
-
-    def call(self) -> Any:
-        if is_empty(self.path):
-            return False
-        max_cost = min(int(self.get_input("max_cost", 254)), 253)
-        return bool(navigation(self).is_path_valid(self.path, max_cost))
-
-    def on_completion(self, response: Any) -> NodeStatus:
-        return SUCCESS if response else FAILURE
-
-
-class SelectorNode(SyncActionNode):
-    """A selector: outputs the id last published on its topic, else the default; FAILURE if
-    neither exists. Publish with ``nodes.nav2.common.publish(context, topic, "id")``."""
-
-    topic_default: ClassVar[str] = ""
-    default_port: ClassVar[str] = ""
-    output_name: ClassVar[str] = ""
-    what: ClassVar[str] = ""
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("topic_name", STRING, cls.topic_default, f"the input topic name to select the "
-                                                                     f"{cls.what}"),
-                input_port(cls.default_port, STRING, description=f"the default {cls.what} to use if there "
-                                                                 "is not any external topic message received."),
-                output_port(cls.output_name, STRING, description=f"Selected {cls.what} by subscription")]
-
-    def __init__(self, name: str, config: NodeConfig | None = None):
-        super().__init__(name, config)
-        self.topic = self.get_input("topic_name", self.topic_default) or self.topic_default
-        self.last_selected = ""
-
-    def tick(self) -> NodeStatus:
-        from .common import nav2_topics
-
-        msg = nav2_topics(self.context).get(self.topic)
-        if isinstance(msg, str) and msg:
-            self.last_selected = msg
-        if not self.last_selected:
-            default = self.get_input(self.default_port, "") or ""
-            if not default:
-                return FAILURE
-            self.last_selected = default
-        safe_set_output(self, self.output_name, self.last_selected)
-        return SUCCESS
-
 
 def _selector(cls_name: str, topic: str, default_port: str, output: str, what: str) -> type:
     doc = (f"Outputs the {what} id to use on ``{output}``: the last one published on the "
@@ -1009,4 +561,3 @@ SmootherSelector = _selector("SmootherSelector", "smoother_selector", "default_s
                              "selected_smoother", "smoother")
 PathHandlerSelector = _selector("PathHandlerSelector", "path_handler_selector", "default_path_handler",
                                 "selected_path_handler", "path_handler")
-

@@ -16,7 +16,7 @@ from bt_runtime.status import FAILURE, RUNNING, SUCCESS, NodeStatus
 
 from ..robot import robot_pose
 from ..types import GOALS, PATH, POSE, WAYPOINT_STATUSES, WaypointStatusCode, empty_path
-from .actions import safe_set_output
+from .bases import safe_set_output
 from .common import closest_index, first_after_integrated_distance, points_of, same_path
 
 

@@ -15,7 +15,7 @@ from bt_runtime.ports import BOOL, DOUBLE, FLOAT, STRING, input_port, output_por
 from bt_runtime.status import FAILURE, SUCCESS, NodeStatus
 
 from ..types import DURATION, ERROR_CODE, GOALS, PATH, POSE, ROUTE
-from .actions import error_ports, safe_set_output, server_ports
+from .bases import error_ports, safe_set_output, server_ports
 from .common import log
 
 _warned: set[str] = set()

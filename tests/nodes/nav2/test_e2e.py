@@ -22,7 +22,6 @@ from bt_runtime.runtime.config import GateConfig, RuntimeConfig
 from bt_runtime.runtime.messages import Pose2D
 from bt_runtime.xml.v3 import BTFormatWarning
 from nodes.nav2 import NAV2_NODES, publish_stamped, register_nav2_nodes, start_navigation
-from nodes.nav2.models import refreshed
 from sim.driver import SimDriver
 from sim.faults import RemoveObstacle
 from tests.paths import REFERENCE, ROOT
@@ -330,8 +329,10 @@ def test_our_tree_is_nav2_jazzys_tree_node_for_node():
 
 
 def test_our_tree_models_section_is_up_to_date():
-    text = OUR_TREE.read_text(encoding="utf-8")
-    assert refreshed(text) == text, "run: python -m nodes.nav2.models trees/navigation.xml"
+    from bt_runtime.cli import models
+
+    fix = "run: python -m bt_runtime models --embed trees/navigation.xml"
+    assert models.main(["--embed", str(OUR_TREE), "--check"]) == 0, fix
 
 
 @pytest.mark.skipif(not (STOCK / "jazzy" / "nav2_tree_nodes.xml").exists(), reason="no models")
