@@ -205,6 +205,11 @@ class BehaviorTreeFactory:
     def register_behavior_tree_from_file(self, path: str | Path) -> LoadResult:
         return self.registry.load_file(path)
 
+    def add_include_search_path(self, folder: str | Path) -> None:
+        """Let ``<include>`` reach files below ``folder`` too (by default an include must stay
+        below the folder of the file the user loaded)."""
+        self.registry.include_search_paths.append(Path(folder))
+
     def registered_behavior_trees(self) -> list[str]:
         """The IDs of the registered trees, sorted (BT.CPP keeps them in a std::map)."""
         return sorted(self.registry.trees)

@@ -93,15 +93,21 @@ class TreeRegistry:
         self.first_main_tree: str | None = None
         self._documents_opened = 0
         self._anonymous = 0
+        self.include_search_paths: list[Path] = []  # folders <include> may reach besides the top file's
 
     # -- entry points --------------------------------------------------------------------------
     def load_text(self, text: str | bytes, file: str | None = None) -> LoadResult:
         doc = parse_xml_text(text, file=file)
-        return self._load(doc, [])
+        return self._load(doc, [], self._include_roots(doc))
 
     def load_file(self, path: str | Path) -> LoadResult:
         doc = read_xml_file(path)
-        return self._load(doc, [str(Path(path).resolve())])
+        return self._load(doc, [str(Path(path).resolve())], self._include_roots(doc))
+
+    def _include_roots(self, top: XMLDocument) -> tuple[Path, ...]:
+        """Where includes of a document loaded by the user may lead: below its folder (the
+        working directory for text) or below a registered search path."""
+        return (top.directory.resolve(), *(p.resolve() for p in self.include_search_paths))
 
     def clear(self) -> None:
         self.trees.clear()
@@ -114,7 +120,7 @@ class TreeRegistry:
         return XMLLoadError(message, file=doc.file, line=doc.line_of(elem) if elem is not None else None,
                             element=elem.tag if elem is not None else None)
 
-    def _load(self, doc: XMLDocument, include_stack: list[str]) -> LoadResult:
+    def _load(self, doc: XMLDocument, include_stack: list[str], roots: tuple[Path, ...]) -> LoadResult:
         root = doc.root
         if root.tag != "root":
             raise self._err(doc, root, "The XML must have a root node called <root>")
@@ -132,7 +138,7 @@ class TreeRegistry:
         # Includes first, recursively (their trees are registered in the same registry).
         for child in children:
             if child.tag == "include":
-                self._load_include(doc, child, include_stack)
+                self._load_include(doc, child, include_stack, roots)
 
         models = [c for c in children if c.tag == "TreeNodesModel"]
         if len(models) > 1:
@@ -167,24 +173,28 @@ class TreeRegistry:
         new_ids = [i for i in ids if i not in before]
         return LoadResult(new_ids, ids, main_tree, doc)
 
-    def _load_include(self, doc: XMLDocument, elem: etree._Element, include_stack: list[str]) -> None:
+    def _load_include(self, doc: XMLDocument, elem: etree._Element, include_stack: list[str],
+                      roots: tuple[Path, ...]) -> None:
+        """Load an included file: its path is relative to the including file (as in BT.CPP) and
+        must stay below the top-level file's folder or a registered search path, so an included
+        file in a child folder may include ``../x.xml`` but nothing outside."""
         path_attr = elem.get("path")
         if path_attr is None:
             raise self._err(doc, elem, "Invalid <include> tag: missing 'path' attribute")
         if elem.get("ros_pkg") is not None and not Path(path_attr).is_absolute():
             raise self._err(doc, elem, "<include ros_pkg=...> needs ROS package lookup, which bt_runtime "
                                        "does not do; use a path relative to this file")
-        base = doc.directory.resolve()
-        target = (base / path_attr).resolve()
-        if base != target and base not in target.parents:
+        target = (doc.directory.resolve() / path_attr).resolve()
+        if not any(root == target or root in target.parents for root in roots):
+            allowed = ", ".join(str(root) for root in roots)
             raise self._err(doc, elem, f"include path '{path_attr}' resolves outside the folder of the "
-                                       f"including file ({base}); refused")
+                                       f"top-level file and the include search paths ({allowed}); refused")
         if str(target) in include_stack:
             raise self._err(doc, elem, f"include cycle: '{path_attr}' is already being loaded")
         if not target.is_file():
             raise self._err(doc, elem, f"included file not found: {target}")
         included = read_xml_file(target)
-        self._load(included, [*include_stack, str(target)])
+        self._load(included, [*include_stack, str(target)], roots)
 
     def _load_models(self, doc: XMLDocument, models: etree._Element) -> None:
         for entry in element_children(models):

@@ -1,4 +1,4 @@
-"""Documents: includes (relative, confined to the including file's folder, cycles),
+"""Documents: includes (relative, confined to the top-level file's folder, cycles),
 TreeNodesModel (subtree port defaults and mandatory ports, node placeholders), v3 files."""
 
 from __future__ import annotations
@@ -67,13 +67,36 @@ def test_include_outside_the_folder_is_refused(tmp_path):
     assert BehaviorTreeFactory().create_tree_from_file(main).tick_once() is S
 
 
-def test_nested_include_is_confined_to_its_own_folder(tmp_path):
-    write(tmp_path / "top.xml", tree_file("Top", "<AlwaysSuccess/>"))
-    inner = write(tmp_path / "sub" / "inner.xml", tree_file("Inner", "<AlwaysSuccess/>", ("../top.xml",)))
-    main = write(tmp_path / "main.xml", tree_file("M", '<SubTree ID="Inner"/>', ("sub/inner.xml",)))
-    with pytest.raises(XMLLoadError, match="outside the folder") as info:
+def test_included_file_may_climb_back_inside_the_top_level_folder(tmp_path):
+    """sub/inner.xml includes ../top.xml: outside its own folder, inside main.xml's (as
+    BT.CPP's own child_include_parent.xml does)."""
+    write(tmp_path / "top.xml", tree_file("Top", "<AlwaysFailure/>"))
+    write(tmp_path / "sub" / "inner.xml", tree_file("Inner", '<SubTree ID="Top"/>', ("../top.xml",)))
+    write(tmp_path / "sub" / "deeper" / "leaf.xml", tree_file("Leaf", "<AlwaysSuccess/>", ("../../top.xml",)))
+    main = write(tmp_path / "main.xml", tree_file("M", '<Sequence><SubTree ID="Leaf"/><SubTree ID="Inner"/></Sequence>',
+                                                  ("sub/inner.xml", "sub/deeper/leaf.xml")))
+    factory = BehaviorTreeFactory()
+    assert factory.create_tree_from_file(main).tick_once() is F  # Leaf succeeds, Inner runs Top
+    assert factory.registered_behavior_trees() == ["Inner", "Leaf", "M", "Top"]
+
+
+def test_nested_include_cannot_leave_the_top_level_folder(tmp_path):
+    write(tmp_path / "outside.xml", tree_file("Outside", "<AlwaysSuccess/>"))
+    inner = write(tmp_path / "app" / "sub" / "inner.xml", tree_file("Inner", "<AlwaysSuccess/>", ("../../outside.xml",)))
+    main = write(tmp_path / "app" / "main.xml", tree_file("M", '<SubTree ID="Inner"/>', ("sub/inner.xml",)))
+    with pytest.raises(XMLLoadError, match="outside the folder of the top-level file") as info:
         BehaviorTreeFactory().create_tree_from_file(main)
-    assert info.value.file == str(inner)
+    assert info.value.file == str(inner) and info.value.element == "include"
+
+
+def test_include_search_path_widens_the_confinement(tmp_path):
+    write(tmp_path / "shared" / "common.xml", tree_file("Common", "<AlwaysFailure/>"))
+    main = write(tmp_path / "app" / "main.xml", tree_file("M", '<SubTree ID="Common"/>', ("../shared/common.xml",)))
+    with pytest.raises(XMLLoadError, match="outside the folder"):
+        BehaviorTreeFactory().create_tree_from_file(main)
+    factory = BehaviorTreeFactory()
+    factory.add_include_search_path(tmp_path / "shared")
+    assert factory.create_tree_from_file(main).tick_once() is F
 
 
 def test_include_cycles(tmp_path):
