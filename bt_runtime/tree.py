@@ -52,6 +52,17 @@ class Tree:
         self._observers: list[tuple[StatusCallback, list[Callable[[], None]]]] = []
         self.retick_cutoffs = 0  # tick_once calls that stopped at max_reticks
 
+    def __del__(self) -> None:
+        """Break the node <-> cell back-references when the tree is dropped, so its nodes are
+        freed by reference counting at once instead of waiting for the cyclic collector
+        (BT.CPP destroys a tree's nodes with the tree; a node kept past its tree is dead)."""
+        for record in getattr(self, "subtrees", ()):
+            for node in record.nodes:
+                node.__dict__.pop("execute_tick", None)
+                cell = node._cell
+                cell.node = None
+                cell.fast = None
+
     # -- structure -----------------------------------------------------------------------------
     @property
     def root_node(self) -> TreeNode:
