@@ -57,6 +57,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--config", type=Path, default=None, help="runtime configuration (YAML)")
     p.add_argument("--ros2-config", type=Path, default=None, metavar="FILE",
                    help="--driver ros2: topics, QoS, domain, Nav2 names, components (YAML, see docs/ros2.md)")
+    p.add_argument("--loopback", action="store_true",
+                   help="--driver ros2: DDS on 127.0.0.1 only, to reach a `sim-robot --loopback` on this machine")
     add_registration_arguments(p)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="set a root blackboard entry before the first tick (repeatable)")
@@ -136,6 +138,8 @@ def make_driver(args: argparse.Namespace):
             config = Ros2Config.load(path) if path else Ros2Config()
         except ValueError as exc:  # names the file and field; no traceback
             raise UsageError(str(exc)) from None
+        if getattr(args, "loopback", False):
+            config.loopback_only = True
         return Ros2Driver(config.with_environment())
     from sim.driver import SimDriver
 

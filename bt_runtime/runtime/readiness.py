@@ -35,13 +35,16 @@ class Readiness:
 
 async def wait_until_reported(supervisor, clock, timeout: float, *, exclude: tuple[str, ...] = ("tree",),
                               poll: float = 0.02) -> Readiness:
-    """Wait until no watched component is UNKNOWN (or ``timeout`` s of loop time pass)."""
+    """Wait until every watched component has sent a message (or ``timeout`` s of loop time
+    pass). Never heard from is what counts: after the supervisor's start-up grace a silent
+    component reads FAILED, and it is still worth waiting for."""
     start = clock()
-    names = [n for n, r in supervisor.components.items() if n not in exclude and r.watched]
+    records = {n: r for n, r in supervisor.components.items() if n not in exclude and r.watched}
     while True:
-        states = {n: supervisor.health(n) for n in names}
-        silent = [n for n, s in states.items() if s is Health.UNKNOWN]
+        states = {n: supervisor.health(n) for n in records}
+        silent = [n for n, r in records.items()
+                  if states[n] is Health.UNKNOWN or (r.last_seen is None and r.last_message is None)]
         if not silent or clock() - start >= timeout:
-            failed = [n for n, s in states.items() if s in (Health.FAILED, Health.DEAD)]
+            failed = [n for n, s in states.items() if s in (Health.FAILED, Health.DEAD) and n not in silent]
             return Readiness(clock() - start, silent, failed)
         await asyncio.sleep(poll)
