@@ -70,6 +70,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     from groot.cli import add_arguments as add_groot_arguments
 
     add_groot_arguments(p)
+    from .recording import add_arguments as add_recording_arguments
+
+    add_recording_arguments(p)
     p.set_defaults(func=run)
     return p
 
@@ -184,6 +187,12 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
     held.update(runtime=runtime, goals=outcomes, witness=witness, handoff=handoff, picture=picture,
                 notes=[], goal_poses=goals)
     progress = ProgressLine(runtime, console) if console is not None else None
+    from .recording import RecordingError, start_recording
+
+    try:
+        recording = start_recording(args, runtime, driver)
+    except RecordingError as exc:
+        raise UsageError(str(exc)) from None
     from groot.cli import Monitoring
 
     monitoring = await Monitoring.from_args(runtime.tree, args).start()
@@ -224,6 +233,8 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
         await runtime.stop()
         witness.detach()
         await monitoring.stop()
+        if recording.enabled:
+            held["summary"].recording = recording.stop()
 
 
 def _say(console: SharedConsole | None, text: str) -> None:
@@ -303,6 +314,10 @@ def report(args: argparse.Namespace, held: dict[str, Any], interrupted: bool) ->
             extra.append(f"picture: {png}")
         except Exception as exc:  # a picture that cannot be drawn must not hide the summary
             extra.append(f"picture not written: {exc}")
+    if getattr(summary, "recording", None):
+        from .recording import format_report
+
+        extra.append(format_report(summary.recording))
     out = sys.stderr if args.log_json else sys.stdout
     with contextlib.suppress(BrokenPipeError):
         print(format_summary(summary, runtime, goals, result, uses_goal_handoff=held["handoff"], extra=extra),

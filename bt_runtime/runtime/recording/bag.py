@@ -1,0 +1,129 @@
+"""A rosbag2 bag (version 9, MCAP storage) written in closed segments.
+
+Why segments: a rosbag2 reader (``rosbags``, ``ros2 bag``) trusts ``metadata.yaml`` and a
+complete MCAP file (footer and summary). Every ``flush`` closes the current MCAP file and
+rewrites ``metadata.yaml`` (atomically) to list it, so a process killed at any moment leaves
+a bag that every reader opens, holding everything up to its last flush. Files are named as
+``ros2 bag record`` names split bags: ``<bag>_0.mcap``, ``<bag>_1.mcap``...
+
+The MCAP files are written by foxglove-sdk's writer (profile ``ros2``, ``ros2msg`` schemas,
+``cdr`` messages, zstd chunks) attached to the recording's ``ChannelSet``; this class opens
+and closes them, counts what went in, and writes ``metadata.yaml``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from .channels import ChannelSet, dump_yaml, offered_qos
+from .types import type_hash
+
+
+class Rosbag2Bag:
+    """Not thread-safe: the writer thread owns it."""
+
+    def __init__(self, path: str | Path, channels: ChannelSet, *, compression: str = "zstd",
+                 custom_data: dict[str, str] | None = None):
+        self.path = Path(path)
+        if self.path.exists() and (not self.path.is_dir() or any(self.path.iterdir())):
+            raise FileExistsError(f"{self.path}: exists and is not an empty folder (a bag is never overwritten)")
+        self.path.mkdir(parents=True, exist_ok=True)
+        self.channels = channels
+        self.compression = compression
+        self.custom_data = dict(custom_data or {})
+        self.counts: dict[str, int] = {}  # per topic, closed segments
+        self.files: list[dict[str, Any]] = []  # closed segments
+        self.start_ns: int | None = None
+        self.end_ns = 0
+        self.closed = False
+        self._writer: Any = None
+        self._seg_path: Path | None = None
+        self._seg_counts: dict[str, int] = {}
+        self._seg_start = 0
+        self._seg_end = 0
+
+    def open_segment(self) -> None:
+        """Attach a new MCAP file to the channels (before the first message that goes into it)."""
+        if self._writer is not None or self.closed:
+            return
+        import foxglove
+        from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+
+        compression = {"zstd": MCAPCompression.Zstd, "lz4": MCAPCompression.Lz4, "none": None}[self.compression]
+        self._seg_path = self.path / f"{self.path.name}_{len(self.files)}.mcap"
+        self._writer = foxglove.open_mcap(self._seg_path, context=self.channels.context,
+                                          writer_options=MCAPWriteOptions(profile="ros2", compression=compression,
+                                                                          compression_threads=0))
+        self._seg_counts = {}
+        self._seg_start, self._seg_end = 2**63 - 1, 0
+
+    def count(self, topic: str, t_ns: int) -> None:
+        """One message of ``topic`` goes into the open segment."""
+        counts = self._seg_counts
+        counts[topic] = counts.get(topic, 0) + 1
+        if t_ns < self._seg_start:
+            self._seg_start = t_ns
+        if t_ns > self._seg_end:
+            self._seg_end = t_ns
+
+    def flush(self) -> None:
+        """Close the open segment and list it in metadata.yaml."""
+        writer, self._writer = self._writer, None
+        if writer is None:
+            return
+        writer.close()
+        n = sum(self._seg_counts.values())
+        if n == 0:
+            self._seg_path.unlink(missing_ok=True)
+            return
+        self.files.append({"path": self._seg_path.name,
+                           "starting_time": {"nanoseconds_since_epoch": self._seg_start},
+                           "duration": {"nanoseconds": self._seg_end - self._seg_start},
+                           "message_count": n})
+        for topic, k in self._seg_counts.items():
+            self.counts[topic] = self.counts.get(topic, 0) + k
+        self.start_ns = self._seg_start if self.start_ns is None else min(self.start_ns, self._seg_start)
+        self.end_ns = max(self.end_ns, self._seg_end)
+        self.write_metadata()
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.flush()
+        self.closed = True
+        self.write_metadata()
+
+    def message_counts(self) -> dict[str, int]:
+        return dict(self.counts)
+
+    def metadata(self) -> dict[str, Any]:
+        start = self.start_ns or 0
+        types = self.channels.types
+        latched = self.channels.latched
+        info = {
+            "version": 9,
+            "storage_identifier": "mcap",
+            "duration": {"nanoseconds": max(0, self.end_ns - start)},
+            "starting_time": {"nanoseconds_since_epoch": start},
+            "message_count": sum(self.counts.values()),
+            "topics_with_message_count": [
+                {"topic_metadata": {"name": topic, "type": types[topic], "serialization_format": "cdr",
+                                    "offered_qos_profiles": offered_qos(topic in latched),
+                                    "type_description_hash": type_hash(types[topic])},
+                 "message_count": n}
+                for topic, n in self.counts.items()],
+            "compression_format": "",
+            "compression_mode": "",
+            "relative_file_paths": [f["path"] for f in self.files],
+            "files": self.files,
+            "custom_data": self.custom_data,
+            "ros_distro": "jazzy",
+        }
+        return {"rosbag2_bagfile_information": info}
+
+    def write_metadata(self) -> None:
+        tmp = self.path / "metadata.yaml.tmp"
+        tmp.write_text(dump_yaml(self.metadata()), encoding="utf-8")
+        os.replace(tmp, self.path / "metadata.yaml")

@@ -1,0 +1,56 @@
+"""One foxglove-sdk context with a channel per topic: the single place a serialized message goes.
+
+Every sink (the bag's current MCAP segment, the live WebSocket server) is attached to this
+context, so one ``log`` call per message feeds them all, and the MCAP records are written by
+the SDK's native writer (about 7 us a message, a third of a pure-Python writer).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .types import schema
+
+
+def offered_qos(latched: bool) -> list[dict[str, Any]]:
+    """The offered QoS rosbag2 stores per topic (v9 layout); latched topics are transient-local
+    so ``ros2 bag play`` re-offers them to late subscribers, as map_server and tf_static do."""
+    return [{"history": "keep_last", "depth": 1 if latched else 10, "reliability": "reliable",
+             "durability": "transient_local" if latched else "volatile",
+             "deadline": {"sec": 0, "nsec": 0}, "lifespan": {"sec": 0, "nsec": 0},
+             "liveliness": "automatic", "liveliness_lease_duration": {"sec": 0, "nsec": 0},
+             "avoid_ros_namespace_conventions": False}]
+
+
+def dump_yaml(data: Any) -> str:
+    import yaml
+
+    return yaml.safe_dump(data, default_flow_style=False, sort_keys=False)
+
+
+class ChannelSet:
+    def __init__(self) -> None:
+        import foxglove
+
+        self._foxglove = foxglove
+        self.context = foxglove.Context()
+        self.channels: dict[str, Any] = {}
+        self.types: dict[str, str] = {}
+        self.latched: set[str] = set()
+
+    def add(self, topic: str, typename: str, *, latched: bool = False) -> Any:
+        fox = self._foxglove
+        known = self.types.get(topic)
+        if known is not None:
+            if known != typename:
+                raise ValueError(f"topic {topic} is {known}, cannot also be {typename}")
+            return self.channels[topic]
+        qos = dump_yaml(offered_qos(latched)).strip()
+        channel = fox.Channel(topic, message_encoding="cdr", context=self.context,
+                              schema=fox.Schema(name=typename, encoding="ros2msg", data=schema(typename).encode()),
+                              metadata={"offered_qos_profiles": qos})
+        self.channels[topic] = channel
+        self.types[topic] = typename
+        if latched:
+            self.latched.add(topic)
+        return channel

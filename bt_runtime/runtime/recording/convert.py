@@ -1,0 +1,250 @@
+"""The runtime's messages as ROS 2 messages (rosbags typestore classes), on the writer thread.
+
+Each converter takes ``(state, topic, t, payload)`` and returns ``[(topic, typename, msg)]``
+(one input may give several outputs: an odometry message also gives the odom -> base_link
+transform). ``ConvertState`` keeps what a conversion needs from earlier messages (the last
+odometry pose, to publish map -> odom from a localized pose).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .config import Frames
+from .types import msg_class
+
+T = msg_class
+Time = T("builtin_interfaces/msg/Time")
+Header = T("std_msgs/msg/Header")
+Vector3 = T("geometry_msgs/msg/Vector3")
+Point = T("geometry_msgs/msg/Point")
+Quaternion = T("geometry_msgs/msg/Quaternion")
+Pose = T("geometry_msgs/msg/Pose")
+PoseStamped = T("geometry_msgs/msg/PoseStamped")
+PoseWithCovariance = T("geometry_msgs/msg/PoseWithCovariance")
+Twist = T("geometry_msgs/msg/Twist")
+TwistWithCovariance = T("geometry_msgs/msg/TwistWithCovariance")
+Transform = T("geometry_msgs/msg/Transform")
+TransformStamped = T("geometry_msgs/msg/TransformStamped")
+TFMessage = T("tf2_msgs/msg/TFMessage")
+LaserScan = T("sensor_msgs/msg/LaserScan")
+Imu = T("sensor_msgs/msg/Imu")
+BatteryState = T("sensor_msgs/msg/BatteryState")
+Odometry = T("nav_msgs/msg/Odometry")
+Path = T("nav_msgs/msg/Path")
+OccupancyGrid = T("nav_msgs/msg/OccupancyGrid")
+MapMetaData = T("nav_msgs/msg/MapMetaData")
+DiagnosticArray = T("diagnostic_msgs/msg/DiagnosticArray")
+DiagnosticStatus = T("diagnostic_msgs/msg/DiagnosticStatus")
+KeyValue = T("diagnostic_msgs/msg/KeyValue")
+Log = T("rcl_interfaces/msg/Log")
+BehaviorTreeLog = T("nav2_msgs/msg/BehaviorTreeLog")
+BehaviorTreeStatusChange = T("nav2_msgs/msg/BehaviorTreeStatusChange")
+
+COV36 = np.zeros(36, np.float64)
+COV9 = np.zeros(9, np.float64)
+NO_COV9 = np.array([-1.0] + [0.0] * 8)  # REP 145: -1 in the first element = not provided
+EMPTY32 = np.zeros(0, np.float32)
+LOG_INFO, LOG_WARN, LOG_ERROR = 20, 30, 40
+
+Output = list[tuple[str, str, Any]]
+
+
+def stamp(t: float) -> Any:
+    sec = math.floor(t)
+    return Time(sec=int(sec), nanosec=min(int(round((t - sec) * 1e9)), 999_999_999))
+
+
+def quat(yaw: float) -> Any:
+    return Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
+
+
+def pose(x: float, y: float, yaw: float) -> Any:
+    return Pose(position=Point(x=float(x), y=float(y), z=0.0), orientation=quat(yaw))
+
+
+def transform(t: float, parent: str, child: str, x: float, y: float, yaw: float) -> Any:
+    return TransformStamped(header=Header(stamp=stamp(t), frame_id=parent), child_frame_id=child,
+                            transform=Transform(translation=Vector3(x=float(x), y=float(y), z=0.0),
+                                                rotation=quat(yaw)))
+
+
+def twist(linear: float, angular: float) -> Any:
+    return Twist(linear=Vector3(x=float(linear), y=0.0, z=0.0), angular=Vector3(x=0.0, y=0.0, z=float(angular)))
+
+
+@dataclass
+class ConvertState:
+    frames: Frames = field(default_factory=Frames)
+    tf_topic: str = "/tf"
+    odom_pose: tuple[float, float, float] | None = None  # last odom -> base_link
+
+
+# -- sensors ------------------------------------------------------------------------------------
+
+def scan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    ranges = np.asarray(m.ranges, dtype=np.float32)
+    n = len(ranges)
+    msg = LaserScan(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.laser),
+                    angle_min=float(m.angle_min),
+                    angle_max=float(m.angle_min + m.angle_increment * max(n - 1, 0)),
+                    angle_increment=float(m.angle_increment), time_increment=0.0, scan_time=0.0,
+                    range_min=float(m.range_min), range_max=float(m.range_max), ranges=ranges,
+                    intensities=EMPTY32)
+    return [(topic, "sensor_msgs/msg/LaserScan", msg)]
+
+
+def odom(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    f = s.frames
+    p = m.pose
+    s.odom_pose = (p.x, p.y, p.yaw)
+    msg = Odometry(header=Header(stamp=stamp(m.stamp), frame_id=f.odom), child_frame_id=f.base,
+                   pose=PoseWithCovariance(pose=pose(p.x, p.y, p.yaw), covariance=COV36),
+                   twist=TwistWithCovariance(twist=twist(m.twist.linear, m.twist.angular), covariance=COV36))
+    tf = TFMessage(transforms=[transform(m.stamp, f.odom, f.base, p.x, p.y, p.yaw)])
+    return [(topic, "nav_msgs/msg/Odometry", msg), (s.tf_topic, "tf2_msgs/msg/TFMessage", tf)]
+
+
+def localized(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    """map -> odom, so that map -> odom -> base_link is the localized pose (as AMCL does)."""
+    if s.odom_pose is None:
+        return []
+    ox, oy, oyaw = s.odom_pose
+    p = m.pose
+    yaw = p.yaw - oyaw
+    c, sn = math.cos(yaw), math.sin(yaw)
+    x = p.x - (c * ox - sn * oy)
+    y = p.y - (sn * ox + c * oy)
+    tf = TFMessage(transforms=[transform(m.stamp, s.frames.map, s.frames.odom, x, y, yaw)])
+    return [(topic, "tf2_msgs/msg/TFMessage", tf)]
+
+
+def imu(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    msg = Imu(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.imu), orientation=quat(m.yaw),
+              orientation_covariance=COV9, angular_velocity=Vector3(x=0.0, y=0.0, z=float(m.yaw_rate)),
+              angular_velocity_covariance=COV9,
+              linear_acceleration=Vector3(x=float(m.accel_x), y=float(m.accel_y), z=0.0),
+              linear_acceleration_covariance=COV9)
+    return [(topic, "sensor_msgs/msg/Imu", msg)]
+
+
+def battery(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    nan = math.nan
+    msg = BatteryState(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.base), voltage=float(m.voltage),
+                       temperature=nan, current=-float(m.current), charge=nan,
+                       capacity=float(m.capacity_ah) if m.capacity_ah else nan,
+                       design_capacity=float(m.capacity_ah) if m.capacity_ah else nan,
+                       percentage=float(m.percentage) / 100.0,
+                       power_supply_status=2 if m.current > 0 else 0,  # DISCHARGING / UNKNOWN
+                       power_supply_health=0, power_supply_technology=0, present=True,
+                       cell_voltage=EMPTY32, cell_temperature=EMPTY32, location="", serial_number="")
+    return [(topic, "sensor_msgs/msg/BatteryState", msg)]
+
+
+def plan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    header = Header(stamp=stamp(m.stamp), frame_id=s.frames.map)
+    pts = np.asarray(m.points, dtype=np.float64)
+    poses = []
+    for i, row in enumerate(pts):
+        if len(row) > 2:
+            yaw = float(row[2])
+        elif i + 1 < len(pts):
+            yaw = math.atan2(pts[i + 1, 1] - row[1], pts[i + 1, 0] - row[0])
+        else:
+            yaw = poses[-1][2] if poses else 0.0
+        poses.append((float(row[0]), float(row[1]), yaw))
+    msg = Path(header=header, poses=[PoseStamped(header=header, pose=pose(*p)) for p in poses])
+    return [(topic, "nav_msgs/msg/Path", msg)]
+
+
+def occupancy(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    h, w = m.data.shape
+    ox, oy, oyaw = m.origin
+    msg = OccupancyGrid(header=Header(stamp=stamp(t), frame_id=s.frames.map),
+                        info=MapMetaData(map_load_time=stamp(t), resolution=float(m.resolution), width=int(w),
+                                         height=int(h), origin=pose(ox, oy, oyaw)),
+                        data=np.ascontiguousarray(m.data, dtype=np.int8).reshape(-1))
+    return [(topic, "nav_msgs/msg/OccupancyGrid", msg)]
+
+
+def tf_static(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    x, y, yaw = m
+    tf = TFMessage(transforms=[transform(t, s.frames.base, s.frames.laser, x, y, yaw)])
+    return [(topic, "tf2_msgs/msg/TFMessage", tf)]
+
+
+# -- commands -----------------------------------------------------------------------------------
+
+def command(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    return [(topic, "geometry_msgs/msg/Twist", twist(m.linear, m.angular))]
+
+
+# -- the autonomy layer -------------------------------------------------------------------------
+
+def tree_log(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    """m: [(t, uid, node_name, previous, current)] of one tick, as Nav2's RosTopicLogger sends."""
+    events = [BehaviorTreeStatusChange(timestamp=stamp(et), node_name=name, uid=uid & 0xFFFF,
+                                       previous_status=prev, current_status=cur)
+              for et, uid, name, prev, cur in m]
+    return [(topic, "nav2_msgs/msg/BehaviorTreeLog", BehaviorTreeLog(timestamp=stamp(t), event_log=events))]
+
+
+DIAG_LEVEL = {"ok": 0, "unknown": 3, "restarting": 1, "failed": 2, "dead": 2}
+
+
+def diagnostics(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    """m: [(name, kind, state, age, restarts, failures)] of every supervised component."""
+    status = [DiagnosticStatus(level=DIAG_LEVEL.get(state, 3), name=f"supervisor: {name}",
+                               message=state, hardware_id=kind,
+                               values=[KeyValue(key="last_seen_age_s", value="" if age is None else f"{age:.3f}"),
+                                       KeyValue(key="restarts", value=str(restarts)),
+                                       KeyValue(key="failures", value=str(failures))])
+              for name, kind, state, age, restarts, failures in m]
+    msg = DiagnosticArray(header=Header(stamp=stamp(t), frame_id=""), status=status)
+    return [(topic, "diagnostic_msgs/msg/DiagnosticArray", msg)]
+
+
+def log_line(t: float, level: int, name: str, text: str) -> Any:
+    return Log(stamp=stamp(t), level=level, name=name, msg=text, file="", function="", line=0)
+
+
+def supervisor_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
+    state = e.state.value
+    level = LOG_WARN if state in ("failed", "dead") else LOG_INFO
+    text = f"{e.component}: {e.previous.value} -> {state}" + (f" ({e.reason})" if e.reason else "")
+    return [(topic, "rcl_interfaces/msg/Log", log_line(e.t, level, "supervisor", text))]
+
+
+def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
+    level = LOG_WARN if e.source in ("estop", "deadman") else LOG_INFO
+    text = f"{e.previous} -> {e.source}: {e.reason}"
+    return [(topic, "rcl_interfaces/msg/Log", log_line(e.t, level, "gate", text))]
+
+
+# -- hook kinds ---------------------------------------------------------------------------------
+
+def odometry_like(s: ConvertState, topic: str, t: float, m: Any) -> Output:
+    p = m.pose
+    msg = Odometry(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.map), child_frame_id=s.frames.base,
+                   pose=PoseWithCovariance(pose=pose(p.x, p.y, p.yaw), covariance=COV36),
+                   twist=TwistWithCovariance(twist=twist(m.twist.linear, m.twist.angular), covariance=COV36))
+    return [(topic, "nav_msgs/msg/Odometry", msg)]
+
+
+def event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
+    text = f"{e.kind} " + json.dumps(e.data, default=str, sort_keys=True)
+    return [(topic, "rcl_interfaces/msg/Log", log_line(e.t, LOG_WARN, "sim", text))]
+
+
+CONVERTERS: dict[str, Callable[[ConvertState, str, float, Any], Output]] = {
+    "scan": scan, "odom": odom, "pose": localized, "imu": imu, "battery": battery, "plan": plan,
+    "map": occupancy, "tf_static": tf_static, "command": command, "tree_log": tree_log,
+    "diagnostics": diagnostics, "supervisor_event": supervisor_event, "gate_event": gate_event,
+    "odometry": odometry_like, "event": event,
+}

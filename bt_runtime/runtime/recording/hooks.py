@@ -1,0 +1,43 @@
+"""What a driver-specific wiring (the simulator's) adds to a recording, without this package
+knowing the simulator: extra driver streams, a map source and the laser's mounting."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(slots=True, frozen=True)
+class MapSnapshot:
+    """An occupancy grid as ROS's map_server publishes it (int8, -1 unknown, 0..100)."""
+
+    data: np.ndarray  # (H, W) int8, row 0 at origin y
+    resolution: float
+    origin: tuple[float, float, float]
+
+
+@dataclass(slots=True, frozen=True)
+class StreamSpec:
+    """Record driver stream ``stream`` on ``topic``.
+
+    ``kind``: 'odometry' (anything with ``stamp``, ``pose`` Pose2D and ``twist``; written as
+    nav_msgs/msg/Odometry in the map frame) or 'event' (anything with ``t``, ``kind``, ``data``;
+    written as rcl_interfaces/msg/Log). ``select`` filters messages (None: all).
+    """
+
+    stream: str
+    topic: str
+    kind: str
+    select: Callable[[Any], bool] | None = None
+
+
+@dataclass
+class RecordingHooks:
+    streams: list[StreamSpec] = field(default_factory=list)
+    # returns (version, snapshot); called on the loop every map_check_period_s, snapshot only
+    # taken (copied) when the version changed
+    map_source: Callable[[], tuple[int, Callable[[], MapSnapshot]]] | None = None
+    laser_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y, yaw in base_link

@@ -1,0 +1,56 @@
+"""Live view: the recording's channels served over the Foxglove WebSocket protocol (foxglove-sdk).
+
+The server is one more sink of the recording's ``ChannelSet`` context, so it receives the same
+CDR bytes as the bag (``ros2msg`` schemas, ``cdr`` encoding). Latched topics (the map, the
+static transforms) are re-sent when a client subscribes, as ROS's transient-local QoS would.
+The server binds to 127.0.0.1 unless told otherwise.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+from .channels import ChannelSet
+
+DEFAULT_PORT = 8765
+
+
+class FoxgloveLive:
+    def __init__(self, channels: ChannelSet, port: int = DEFAULT_PORT, host: str = "127.0.0.1",
+                 name: str = "bt_runtime"):
+        import foxglove
+        from foxglove.websocket import Capability
+
+        self.channels = channels
+        self._latched: dict[str, tuple[Any, int, bytes]] = {}
+        self._lock = threading.Lock()
+        self._last_time_ns = -(2**62)
+        self.server = foxglove.start_server(name=name, host=host, port=port, context=channels.context,
+                                            capabilities=[Capability.Time], server_listener=self)
+        self.host = host
+        self.port = self.server.port
+
+    @property
+    def url(self) -> str:
+        return f"ws://{self.host}:{self.port}"
+
+    def sent(self, topic: str, channel: Any, t_ns: int, data: bytes) -> None:
+        """Called after each logged message: keeps latched ones, tells clients the robot time."""
+        if topic in self.channels.latched:
+            with self._lock:
+                self._latched[topic] = (channel, t_ns, data)
+        if t_ns > self._last_time_ns + 50_000_000:  # 20 Hz at most
+            self._last_time_ns = t_ns
+            self.server.broadcast_time(t_ns)
+
+    def close(self) -> None:
+        self.server.stop()
+
+    # -- server listener (called from the SDK's thread) --------------------------------------------
+    def on_subscribe(self, client: Any, channel: Any) -> None:
+        with self._lock:
+            last = self._latched.get(channel.topic)
+        if last is not None:
+            ch, t_ns, data = last
+            ch.log(data, log_time=t_ns)

@@ -1,0 +1,199 @@
+"""Wires a running ``AutonomyRuntime`` to a ``RecordPipeline``: what is recorded, and when.
+
+Everything here runs on the event loop and only queues references (``pipeline.put``); the
+messages are immutable once published, so the writer thread may convert them later. Sources:
+the driver's sensor streams, the gate's output (``/cmd_vel``) and its source switches, the
+navigation command and the tree's command (one topic per command source), the supervisor's
+events and (every ``diagnostics_period_s``) every component's health, the tree's status
+changes (one ``BehaviorTreeLog`` per tick, as Nav2 publishes them), the static transforms, and
+whatever the hooks add (the simulator's ground truth, faults and map).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import structlog
+
+from .config import RecordingOptions
+from .hooks import RecordingHooks
+from .pipeline import RecordPipeline
+
+if TYPE_CHECKING:
+    from ..app import AutonomyRuntime
+
+log = structlog.get_logger("bt_runtime.recording")
+
+# driver stream -> (converter kind, TopicNames field)
+SENSOR_STREAMS = (("scan", "scan", "scan"), ("odom", "odom", "odom"), ("pose", "pose", "tf"),
+                  ("imu", "imu", "imu"), ("battery", "battery", "battery"), ("plan", "plan", "plan"))
+GATE_SOURCE_TOPIC = {"tree": "tree", "teleop": "teleop"}  # gate sources with a command of their own
+
+
+class Recorder:
+    def __init__(self, runtime: AutonomyRuntime, pipeline: RecordPipeline, options: RecordingOptions | None = None,
+                 hooks: RecordingHooks | None = None):
+        self.runtime = runtime
+        self.pipeline = pipeline
+        self.options = options or RecordingOptions()
+        self.hooks = hooks or RecordingHooks()
+        self.clock = runtime.clock
+        self._unsubscribe: list[Callable[[], None]] = []
+        self._task: asyncio.Task | None = None
+        self._tree_events: list[tuple[float, int, str, str, str]] = []
+        self._tree_keys: list[tuple[int, str, str]] = []
+        self._last_tick_keys: list[tuple[int, str, str]] | None = None
+        self.repeated_ticks = 0  # ticks not logged because they repeated the previous one
+        self._last_output: tuple[Any, str] | None = None
+        self._last_output_t = -1e18
+        self._switches_seen = 0
+        self._map_version: int | None = None
+        self._previous_on_output: Callable[..., Any] | None = None
+        self.attached = False
+
+    # -- wiring ------------------------------------------------------------------------------------
+    def attach(self) -> None:
+        """Subscribe to everything; call after ``load_tree`` and before ``runtime.start()``."""
+        rt, topics, put, clock = self.runtime, self.options.topics, self.pipeline.put, self.clock
+        for stream, kind, field_name in SENSOR_STREAMS:
+            topic = getattr(topics, field_name)
+            if topic:
+                self._subscribe(stream, kind, topic)
+        nav_topic = self._source_topic("navigation")
+        if nav_topic:
+            self._subscribe("nav_cmd_vel", "command", nav_topic)
+        for spec in self.hooks.streams:
+            self._subscribe(spec.stream, spec.kind, spec.topic, spec.select)
+        gate = rt.gate
+        self._previous_on_output = gate.on_output
+        self._switches_seen = len(gate.switches)
+        gate.on_output = self._on_gate_output
+        if topics.supervisor_events:
+            rt.supervisor.add_listener(self._on_supervisor_event)
+        if rt.tree is not None and topics.behavior_tree_log:
+            self._unsubscribe.append(rt.tree.add_status_observer(self._on_status))
+            if rt.tick_loop is not None:
+                rt.tick_loop.on_tick.append(self._on_tick)
+        if topics.tf_static:
+            put("tf_static", topics.tf_static, clock(), self.hooks.laser_offset)
+        self._check_map()
+        self._task = asyncio.get_running_loop().create_task(self._periodic(), name="recording")
+        self.attached = True
+
+    def _subscribe(self, stream: str, kind: str, topic: str, select: Callable[[Any], bool] | None = None) -> None:
+        put, clock = self.pipeline.put, self.clock
+        if select is None:
+            def callback(msg: Any) -> None:
+                put(kind, topic, clock(), msg)
+        else:
+            def callback(msg: Any) -> None:
+                if select(msg):
+                    put(kind, topic, clock(), msg)
+        try:
+            self._unsubscribe.append(self.runtime.driver.subscribe(stream, callback))
+        except (KeyError, ValueError) as exc:  # a driver without this stream (e.g. no plan topic)
+            log.info("recording_stream_unavailable", stream=stream, error=str(exc))
+
+    def _source_topic(self, source: str) -> str:
+        pattern = self.options.topics.cmd_vel_source
+        return pattern.format(source=source) if pattern else ""
+
+    def detach(self) -> None:
+        if not self.attached:
+            return
+        self.attached = False
+        for unsubscribe in self._unsubscribe:
+            with contextlib.suppress(Exception):
+                unsubscribe()
+        self._unsubscribe.clear()
+        rt = self.runtime
+        if rt.gate.on_output == self._on_gate_output:
+            rt.gate.on_output = self._previous_on_output
+        if rt.tick_loop is not None:
+            with contextlib.suppress(ValueError):
+                rt.tick_loop.on_tick.remove(self._on_tick)
+        if self._task is not None:
+            self._task.cancel()
+        self._flush_tree_log()
+        self._diagnostics()
+
+    # -- callbacks (event loop) --------------------------------------------------------------------
+    def _on_gate_output(self, now: float, twist: Any, source: str) -> None:
+        put, topics = self.pipeline.put, self.options.topics
+        if self._previous_on_output is not None:
+            self._previous_on_output(now, twist, source)
+        key = (twist, source)
+        if key == self._last_output and now - self._last_output_t < self.options.cmd_vel_repeat_s:
+            return  # the gate republishes its decision after every tick: keep changes and a heartbeat
+        self._last_output, self._last_output_t = key, now
+        if topics.cmd_vel:
+            put("command", topics.cmd_vel, now, twist)
+        own = GATE_SOURCE_TOPIC.get(source)
+        if own is not None:
+            topic = self._source_topic(own)
+            if topic:  # the source's own command, before the gate's limits
+                put("command", topic, now, self.runtime.gate.decide(now)[1])
+        switches = self.runtime.gate.switches
+        if len(switches) > self._switches_seen and topics.gate_events:
+            for switch in switches[self._switches_seen:]:
+                put("gate_event", topics.gate_events, switch.t, switch)
+        self._switches_seen = len(switches)
+
+    def _on_supervisor_event(self, event: Any) -> None:
+        if self.attached:  # the supervisor has no remove_listener: a detached recorder ignores it
+            self.pipeline.put("supervisor_event", self.options.topics.supervisor_events, event.t, event)
+
+    def _on_status(self, stamp: float, node: Any, previous: Any, new: Any) -> None:
+        uid = node.config.uid
+        self._tree_events.append((stamp, uid, node.name, previous.name, new.name))
+        self._tree_keys.append((uid, previous, new))
+
+    def _on_tick(self, _status: Any) -> None:
+        if self._tree_events:
+            self._flush_tree_log()
+
+    def _flush_tree_log(self) -> None:
+        events, keys = self._tree_events, self._tree_keys
+        if not events:
+            return
+        self._tree_events, self._tree_keys = [], []
+        if self.options.tree_log == "changes" and keys == self._last_tick_keys:
+            self.repeated_ticks += 1
+            return
+        self._last_tick_keys = keys
+        self.pipeline.put("tree_log", self.options.topics.behavior_tree_log, self.clock(), events)
+
+    # -- periodic (robot time) ---------------------------------------------------------------------
+    async def _periodic(self) -> None:
+        opts = self.options
+        period = min(opts.diagnostics_period_s, opts.map_check_period_s)
+        next_diag = self.clock()
+        while True:
+            now = self.clock()
+            if now >= next_diag:
+                self._diagnostics()
+                next_diag = now + opts.diagnostics_period_s
+            self._check_map()
+            self._flush_tree_log()  # status changes outside ticks (halts, restarts)
+            await asyncio.sleep(period)
+
+    def _diagnostics(self) -> None:
+        topic = self.options.topics.diagnostics
+        if not topic:
+            return
+        sup = self.runtime.supervisor
+        rows = [(name, rec.kind, rec.state.value, sup.age(name), rec.restarts, rec.failures)
+                for name, rec in sup.components.items()]
+        self.pipeline.put("diagnostics", topic, self.clock(), rows)
+
+    def _check_map(self) -> None:
+        source, topic = self.hooks.map_source, self.options.topics.map
+        if source is None or not topic:
+            return
+        version, snapshot = source()
+        if version != self._map_version:
+            self._map_version = version
+            self.pipeline.put("map", topic, self.clock(), snapshot())
