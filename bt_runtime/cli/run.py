@@ -54,7 +54,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--realtime", action="store_true", help="pace the simulation to the wall clock")
     p.add_argument("--driver", default="sim", choices=["sim", "ros2"])
-    p.add_argument("--config", type=Path, default=None, help="runtime configuration (YAML)")
+    p.add_argument("--config", type=Path, default=None,
+                   help="runtime configuration (YAML; `python -m bt_runtime config` prints every setting)")
     p.add_argument("--ros2-config", type=Path, default=None, metavar="FILE",
                    help="--driver ros2: topics, QoS, domain, Nav2 names, components (YAML, see docs/ros2.md)")
     p.add_argument("--loopback", action="store_true",
@@ -113,21 +114,12 @@ def parse_assignment(text: str) -> tuple[str, Any]:
 
 
 def load_config(path: Path | None):
-    from pydantic import ValidationError
-
-    from ..runtime.config import RuntimeConfig
-
-    if path is None:
-        return RuntimeConfig()
-    import yaml
+    from ..runtime.config_file import ConfigError, load_runtime_config
 
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
-        return RuntimeConfig.model_validate(data)
-    except FileNotFoundError:
-        raise UsageError(f"config file not found: {path}") from None
-    except (yaml.YAMLError, ValidationError) as exc:
-        raise UsageError(f"{path}: {exc}") from None
+        return load_runtime_config(path)
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
 
 
 def make_driver(args: argparse.Namespace):

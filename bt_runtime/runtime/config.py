@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 
 class _Model(BaseModel):
@@ -64,6 +64,17 @@ class GateConfig(_Model):
     tree_stale_timeout: float = Field(0.2, gt=0, description="tree command older than this: ignored")
     passthrough: bool = Field(False, description="baseline mode: forward navigation commands only, "
                                                  "no dead-man, like a plain Nav2 setup")
+    priorities: dict[str, int] = Field(
+        default_factory=lambda: {"tree": 20, "nav": 10},
+        description="twist_mux-style priorities of the two command sources (higher wins while fresh); "
+                    "an emergency stop and the dead-man always come first")
+
+    @field_validator("priorities")
+    @classmethod
+    def _two_sources(cls, value: dict[str, int]) -> dict[str, int]:
+        if set(value) != {"tree", "nav"}:
+            raise ValueError(f"needs exactly the sources 'tree' and 'nav' (got {', '.join(sorted(value)) or 'none'})")
+        return value
     watchdog: bool | None = Field(None, description="dead-man on its own OS thread (zeroes the base when the "
                                                     "event loop stalls); None: on for real-time loops")
     nonfinite_repeats: int = Field(3, ge=1, description="non-finite commands in a row from one source before "

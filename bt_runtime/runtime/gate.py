@@ -279,6 +279,9 @@ class DecisionGate:
             return NAV, self._nav, "passthrough"
         if now - self._heartbeat > cfg.deadman_timeout:
             return DEADMAN, ZERO_TWIST, f"tree heartbeat {now - self._heartbeat:.3f} s old"
+        nav_fresh = self._nav_allowed and now - self._nav_stamp <= cfg.nav_stale_timeout
+        if nav_fresh and cfg.priorities["nav"] > cfg.priorities["tree"]:  # configured: navigation first
+            return NAV, self._nav, "navigation command (priority over the tree)"
         tree = self._tree
         if tree is not None:
             if now - self._tree_stamp <= cfg.tree_stale_timeout:
