@@ -84,7 +84,7 @@ class Component:
             return
         old = self.state
         self.state = state
-        self.sim._component_changed(self, old, reason)
+        self.sim.on_component_changed(self, old, reason)
         if state is ACTIVE:
             self.on_activate()
 
@@ -109,7 +109,7 @@ class Component:
 
     async def _restart(self) -> bool:
         if not self.restartable:
-            self.sim._event("restart_refused", component=self.name)
+            self.sim.record_event("restart_refused", component=self.name)
             return False
         self.restart_count += 1
         self._set_state(STARTING, "restart")

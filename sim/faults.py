@@ -245,12 +245,14 @@ class FaultInjector:
             log.exception("fault_failed", fault=fault.kind)
             raise
 
-    def _arm(self) -> None:
+    def arm(self) -> None:
+        """Schedule the faults given before the simulator started (it calls this on start)."""
         pending, self._pending = self._pending, []
         for t, fault in pending:
             self._arm_one(t, fault)
 
-    def _disarm(self) -> None:
+    def disarm(self) -> None:
+        """Cancel the faults still to come (the simulator calls this on stop)."""
         for h in self._handles:
             h.cancel()
         self._handles.clear()
@@ -260,7 +262,7 @@ class FaultInjector:
         sim = self.sim
         rec = FaultRecord(sim.now, fault.kind, fault, details)
         self.log.append(rec)
-        sim._event("fault", fault=fault.kind, **fault.model_dump(exclude={"kind"}), **details)
+        sim.record_event("fault", fault=fault.kind, **fault.model_dump(exclude={"kind"}), **details)
         if sim.options.log_faults:
             log.info("fault", sim_time=round(rec.t, 4), fault=fault.kind,
                      **fault.model_dump(exclude={"kind"}, exclude_none=True), **details)

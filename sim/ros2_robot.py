@@ -282,7 +282,7 @@ class SimRobot:
         except asyncio.CancelledError:
             handle.cancel()
             with contextlib.suppress(Exception, asyncio.CancelledError):
-                await asyncio.wait_for(asyncio.shield(handle._wait()), 1.0)
+                await asyncio.wait_for(asyncio.shield(handle), 1.0)
             raise
 
     async def _navigate(self, goal: Any, ctx: dds.GoalContext) -> tuple[int, Any]:

@@ -282,17 +282,17 @@ class BatteryModel:
             charging = (x - dock.x) ** 2 + (y - dock.y) ** 2 <= self.dock_radius ** 2
         if charging != self.charging:
             self.charging = charging
-            self.sim._event("charging_started" if charging else "charging_stopped", soc=self.soc)
+            self.sim.record_event("charging_started" if charging else "charging_stopped", soc=self.soc)
         self.power = power
         net = power - spec.charge_power_w if charging else power
         volts = spec.voltage_empty + (spec.voltage_full - spec.voltage_empty) * self.soc * 0.01
         self.soc = soc_after(self.soc, net, volts, spec.capacity_ah, dt)
         if self.soc <= 0.0 and not self.depleted:
             self.depleted = True
-            self.sim._battery_depleted()
+            self.sim.on_battery_depleted()
         elif self.soc > 0.0 and self.depleted:
             self.depleted = False
-            self.sim._battery_restored()
+            self.sim.on_battery_restored()
 
 
 class BatteryDriver(Driver):

@@ -185,7 +185,8 @@ class Simulator:
     def running(self) -> bool:
         return self._handle is not None
 
-    def _event(self, kind: str, **data: Any) -> SimEvent:
+    def record_event(self, kind: str, **data: Any) -> SimEvent:
+        """Log ``kind`` in the run's event record (judging, reports) and on the ``sim_event`` topic."""
         ev = SimEvent(self.now, kind, data)
         self.events.append(ev)
         self.bus.publish("sim_event", ev)
@@ -210,8 +211,8 @@ class Simulator:
         self._schedule_drivers()
         self.error = None
         self._handle = loop.call_at(self.t0 + self.dt, self._tick)
-        self.faults._arm()
-        self._event("sim_started", world=self.world.name, robot=self.profile.name, seed=self.seed)
+        self.faults.arm()
+        self.record_event("sim_started", world=self.world.name, robot=self.profile.name, seed=self.seed)
 
     async def stop(self) -> None:
         """Stop stepping (and pending faults and restarts). Raises the error that stopped the
@@ -219,14 +220,14 @@ class Simulator:
         handle, self._handle = self._handle, None
         if handle is not None:
             handle.cancel()
-        self.faults._disarm()
+        self.faults.disarm()
         for c in self._components.values():
             t = c._restart_task
             if t is not None and not t.done():
                 t.cancel()
                 with contextlib.suppress(asyncio.CancelledError):
                     await t
-        self._event("sim_stopped")
+        self.record_event("sim_stopped")
         if self.error is not None:
             raise RuntimeError("the simulation stopped on an error") from self.error
 
@@ -246,7 +247,7 @@ class Simulator:
             self._handle = None
             self.error = exc
             log.exception("sim_physics_failed", step=k)
-            self._event("sim_failed", error=repr(exc), step=k)
+            self.record_event("sim_failed", error=repr(exc), step=k)
             return
         self._handle = loop.call_at(self.t0 + (k + 1) * self.dt, self._tick)
 
@@ -268,7 +269,7 @@ class Simulator:
         base = self.base
         if base.update(now, dt):
             self.bus.publish("cmd_vel_out", Twist(0.0, 0.0))
-            self._event("cmd_timeout")
+            self.record_event("cmd_timeout")
         v, w = base.v, base.w
         phys = self.physics
         phys.step(v, w, dt)
@@ -310,11 +311,11 @@ class Simulator:
             bearings.append(math.atan2(-s * dx + c * dy, c * dx + s * dy))
         for name, pt in touching.items():
             if name not in self._touching:
-                self._event("collision", obstacle=name, point=pt, commanded_v=self.base.v,
-                            body_speed=speed_before)
+                self.record_event("collision", obstacle=name, point=pt, commanded_v=self.base.v,
+                                   body_speed=speed_before)
         for name in self._touching:
             if name not in touching:
-                self._event("collision_end", obstacle=name)
+                self.record_event("collision_end", obstacle=name)
         self._touching = touching
         self._synthetic = [(until, bearing) for until, bearing in self._synthetic if now < until]
         bearings.extend(bearing for _, bearing in self._synthetic)
@@ -354,14 +355,16 @@ class Simulator:
             with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
                 loop.call_soon_threadsafe(self.bus.publish, "cmd_vel_out", Twist(0.0, 0.0))
 
-    def _battery_depleted(self) -> None:
+    def on_battery_depleted(self) -> None:
+        """The battery model reports an empty battery: the base stops."""
         self.base.enabled = False
-        self._event("battery_depleted")
+        self.record_event("battery_depleted")
         self.bus.publish("cmd_vel_out", Twist(0.0, 0.0))
 
-    def _battery_restored(self) -> None:
+    def on_battery_restored(self) -> None:
+        """The battery model reports charge again: the base may move."""
         self.base.enabled = True
-        self._event("battery_restored", soc=self.battery.soc)
+        self.record_event("battery_restored", soc=self.battery.soc)
 
     # --- truth --------------------------------------------------------------------------------
     @property
@@ -410,7 +413,7 @@ class Simulator:
         self.imu.yaw = 0.0
         self.localization.map_odom = pose
         self.localization.estimate = pose
-        self._event("reset_pose", x=pose.x, y=pose.y, yaw=pose.yaw)
+        self.record_event("reset_pose", x=pose.x, y=pose.y, yaw=pose.yaw)
 
     # --- components ---------------------------------------------------------------------------
     def components(self) -> list[ComponentInfo]:
@@ -439,9 +442,10 @@ class Simulator:
         """Restart a component; True once it runs again, False if the restart failed."""
         return await self.component(name).restart()
 
-    def _component_changed(self, comp: Component, old: ComponentState, reason: str) -> None:
-        self._event("component_state", component=comp.name, old=old.value, new=comp.state.value,
-                    reason=reason)
+    def on_component_changed(self, comp: Component, old: ComponentState, reason: str) -> None:
+        """A component reports a state change: recorded, logged and published."""
+        self.record_event("component_state", component=comp.name, old=old.value, new=comp.state.value,
+                           reason=reason)
         log.info("component_state", sim_time=round(self.now, 4), component=comp.name,
                  old=old.value, new=comp.state.value, reason=reason)
         self.bus.publish("component_state", comp.info())
@@ -464,8 +468,8 @@ class Simulator:
         self.dynamic_obstacles[name] = obstacle
         self.physics.add_obstacle(f"dyn:{name}", obstacle)
         self._obstacles_changed()
-        self._event("obstacle_added", name=name, blocks_lidar=obstacle.blocks_lidar,
-                    blocks_body=obstacle.blocks_body, bbox=obstacle.bbox())
+        self.record_event("obstacle_added", name=name, blocks_lidar=obstacle.blocks_lidar,
+                           blocks_body=obstacle.blocks_body, bbox=obstacle.bbox())
         return name
 
     def remove_obstacle(self, name: str) -> bool:
@@ -473,7 +477,7 @@ class Simulator:
             return False
         self.physics.remove_obstacle(f"dyn:{name}")
         self._obstacles_changed()
-        self._event("obstacle_removed", name=name)
+        self.record_event("obstacle_removed", name=name)
         return True
 
     def _obstacles_changed(self) -> None:

@@ -139,7 +139,7 @@ class RegulatedPurePursuit:
         return Pose2D(self.xs[-1], self.ys[-1], self.yaws[-1])
 
     # -- path handling -------------------------------------------------------------------
-    def _prune(self, x: float, y: float) -> int:
+    def update_closest(self, x: float, y: float) -> int:
         """Advance ``closest`` to the path pose nearest the robot within the search distance."""
         i0 = self.closest
         cum = self._cum
@@ -160,7 +160,7 @@ class RegulatedPurePursuit:
         p = self.params
         x, y, yaw = pose.x, pose.y, pose.yaw
         c, s = math.cos(yaw), math.sin(yaw)
-        i0 = self._prune(x, y)
+        i0 = self.update_closest(x, y)
         xs, ys, n = self.xs, self.ys, len(self.xs)
         extent = max(self.costmap.width, self.costmap.height) * self.costmap.resolution / 2.0
         extent2 = extent * extent

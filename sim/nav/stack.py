@@ -722,7 +722,7 @@ class NavStack:
                                                            name="nav.replan")
                     self._update_local(now)
                     pose = self._pose
-                    ctrl._prune(pose.x, pose.y)
+                    ctrl.update_closest(pose.x, pose.y)
                     remaining = ctrl.remaining_length(pose.x, pose.y)
                     if self.goal_checker.is_goal_reached(pose, ctrl.goal, remaining):
                         raise _Finish(_ok())
