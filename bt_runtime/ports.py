@@ -584,12 +584,13 @@ def is_allowed_port_name(name: str) -> bool:
 
 def _make_port(direction: PortDirection, name: str, type_: Any, default: Any,
                description: str) -> PortInfo:
-    if not name or not name[0].isascii() or not name[0].isalpha() or name in ("name", "ID"):
-        raise LogicError("The name of a port must not be 'name' or 'ID' and must start with an "
-                         f"alphabetic character. Underscore is reserved. (got '{name}')")
+    # BT.CPP's CreatePort throws RuntimeError for any name IsAllowedPortName refuses
+    if not name or not name[0].isascii() or not name[0].isalpha() or name in RESERVED_ATTRIBUTES:
+        raise BTRuntimeError("The name of a port must not be 'name' or 'ID' and must start with an "
+                             f"alphabetic character. Underscore is reserved. (got '{name}')")
     bad = find_forbidden_char(name)
     if bad is not None:
-        raise LogicError(f"The port name '{name}' contains the forbidden character {bad!r}")
+        raise BTRuntimeError(f"The port name '{name}' contains the forbidden character {bad!r}")
     return PortInfo(name, direction, port_type(type_), default, description)
 
 

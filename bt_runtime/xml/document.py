@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 from lxml import etree
 
 from ..errors import XMLLoadError
-from ..ports import PortInfo, find_forbidden_char, input_port, port_type
+from ..ports import RESERVED_ATTRIBUTES, PortInfo, find_forbidden_char, port_type
 from ..status import NodeType, PortDirection
 from .reader import ELEMENT, XMLDocument, element_children, parse_xml_text, read_xml_file
 from .v3 import BTFormatWarning, is_v3, translate_v3
@@ -213,15 +213,17 @@ class TreeRegistry:
                 if not name:
                     raise self._err(doc, port_elem, f"A port of model '{model_id}' has no [name] attribute")
                 bad = find_forbidden_char(name)
-                if bad is not None or name[0].isdigit():
-                    raise self._err(doc, port_elem, f"Invalid port name '{name}' in model '{model_id}'")
+                if bad is not None or name[0].isdigit() or name in RESERVED_ATTRIBUTES:
+                    raise self._err(doc, port_elem, f"Invalid port name '{name}' in model '{model_id}'"
+                                                    + (" (a reserved attribute name)" if name in RESERVED_ATTRIBUTES
+                                                       else ""))
                 description = port_elem.get("description") or (port_elem.text or "").strip()
                 type_name = port_elem.get("type") or ""
                 ptype = port_type(type_name) if type_name else port_type(None)
                 default = port_elem.get("default")
-                info = input_port(name, ptype, description=description) if default is None else \
-                    input_port(name, ptype, default=default, description=description)
-                ports[name] = PortInfo(info.name, direction, info.type, info.default, info.description)
+                # built directly, as BT.CPP's model ports are (CreatePort's stricter name rule is not applied)
+                ports[name] = (PortInfo(name, direction, ptype, description=description) if default is None
+                               else PortInfo(name, direction, ptype, default, description))
             if entry.tag == "SubTree":
                 self.subtree_models[model_id] = ports
             else:

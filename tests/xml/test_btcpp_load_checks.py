@@ -131,3 +131,19 @@ def test_registered_behavior_trees_are_sorted(factory):
         '<BehaviorTree ID="Alpha"><AlwaysSuccess/></BehaviorTree><BehaviorTree ID="Mid"><AlwaysSuccess/></BehaviorTree>'
         '</root>')
     assert factory.registered_behavior_trees() == ["Alpha", "Mid", "Zeta"]
+
+
+@pytest.mark.parametrize("name", ["name", "ID", "_skipIf", "_private", "1port", "port name", ""])
+def test_declaring_a_port_with_a_refused_name_is_a_runtime_error(name):
+    with pytest.raises(BTRuntimeError):
+        input_port(name, int)
+
+
+@pytest.mark.parametrize("name", ["ID", "name", "_post", "input value", "1port"])
+def test_subtree_model_port_names_are_checked(factory, name):
+    text = ('<root BTCPP_format="4" main_tree_to_execute="Main"><BehaviorTree ID="Main"><AlwaysSuccess/>'
+            f'</BehaviorTree><TreeNodesModel><SubTree ID="S"><input_port name="{name}"/></SubTree>'
+            '</TreeNodesModel></root>')
+    with pytest.raises(BTRuntimeError, match="Invalid port name") as info:
+        factory.create_tree_from_text(text)
+    assert info.value.element == "input_port"
