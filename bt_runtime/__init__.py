@@ -28,6 +28,7 @@ from .node import (
                      TreeNode,
 )
 from .ports import bidirectional_port, input_port, output_port
+from .printing import print_tree_recursively
 from .status import NodeStatus, NodeType, PortDirection
 from .tree import Tree
 
@@ -35,6 +36,6 @@ __all__ = [
     "AsyncActionNode", "BTRuntimeError", "BehaviorTreeException", "BehaviorTreeFactory", "Blackboard",
     "ConditionNode", "ControlNode", "DecoratorNode", "LogicError", "NodeConfig", "NodeExecutionError",
     "NodeStatus", "NodeType", "PortDirection", "StatefulActionNode", "SyncActionNode", "Tree", "TreeNode",
-    "XMLLoadError", "XMLLogicError", "XMLRuntimeError", "bidirectional_port", "input_port", "output_port",
+    "XMLLoadError", "XMLLogicError", "XMLRuntimeError", "bidirectional_port", "input_port", "output_port", "print_tree_recursively",
 ]
 __version__ = "0.1.0"

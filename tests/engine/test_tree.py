@@ -246,3 +246,19 @@ def test_tick_once_reticks_on_wake_up_until_bounded(factory):
     assert tree.tick_once(max_reticks=3) is NodeStatus.RUNNING and len(calls) == 4
     assert tree.wake_up.is_set and tree.retick_cutoffs == 1  # the next tick goes on at once
     assert tree.tick_once() is NodeStatus.SUCCESS and len(calls) == 10
+
+
+def test_print_tree_recursively_indents_by_depth():
+    import io
+
+    from bt_runtime import print_tree_recursively
+
+    factory = BehaviorTreeFactory()
+    tree = factory.create_tree_from_text(doc(
+        '<Sequence name="root"><Fallback name="pick"><AlwaysFailure name="a"/><AlwaysSuccess name="b"/>'
+        '</Fallback><SubTree ID="S" name="sub"/></Sequence>',
+        '<BehaviorTree ID="S"><Inverter name="inv"><AlwaysFailure name="c"/></Inverter></BehaviorTree>'))
+    out = io.StringIO()
+    print_tree_recursively(tree.root_node, out)
+    assert out.getvalue().splitlines() == [
+        "-" * 16, "root", "   pick", "      a", "      b", "   sub", "      inv", "         c", "-" * 16]
