@@ -27,6 +27,15 @@ if TYPE_CHECKING:
 _ONCE, _EXACTLY_ONCE, _WHILE_RUNNING = 0, 1, 2
 
 
+class HaltError(BTRuntimeError):
+    """Some nodes raised while being halted; every node was halted nonetheless."""
+
+    def __init__(self, errors: list[tuple[str, BaseException]]):
+        self.errors = errors
+        detail = "; ".join(f"{path}: {type(exc).__name__}: {exc}" for path, exc in errors)
+        super().__init__(f"{len(errors)} node(s) failed to halt: {detail}")
+
+
 @dataclass
 class SubtreeRecord:
     """One expanded BehaviorTree: its nodes (creation order), blackboard and instance path."""
@@ -214,13 +223,54 @@ class Tree:
             self.wake_up.remove_listener(woken.set)
 
     def halt_tree(self) -> None:
-        """Halt the root, then halt every node (running ``_onHalted`` everywhere), reset the root."""
+        """Halt the root, then halt every node (running ``_onHalted`` everywhere), reset the root.
+
+        Halting is complete even when some node's halt raises: every node is still halted (a
+        pass that walks the tree without recursion, children before parents, so each error is
+        pinned on the node that raised it), and the errors are raised afterwards as one
+        ``HaltError`` naming each node."""
         if not self.subtrees or not self.subtrees[0].nodes:
             return
         root = self.root_node
-        root.halt_node()
-        self.apply_visitor(lambda node: node.halt_node())
+        errors: list[tuple[str, BaseException]] = []
+        try:
+            root.halt_node()
+            order = self._pre_order(root)  # BT.CPP's applyRecursiveVisitor
+        except Exception:  # halt what that did not reach, deepest first, and find who raised
+            order = self._post_order(root)
+        for node in order:
+            try:
+                node.halt_node()
+            except Exception as exc:
+                errors.append((node.full_path, exc))
+                with contextlib.suppress(Exception):
+                    node.reset_status()  # a node whose on_halted raised is halted all the same
         root.reset_status()
+        if errors:
+            raise HaltError(errors)
+
+    @staticmethod
+    def _pre_order(root: TreeNode) -> list[TreeNode]:
+        out, stack = [], [root]
+        while stack:
+            node = stack.pop()
+            out.append(node)
+            stack.extend(reversed(tuple(node.children_nodes())))
+        return out
+
+    @classmethod
+    def _post_order(cls, root: TreeNode) -> list[TreeNode]:
+        return cls._pre_order_mirrored(root)[::-1]
+
+    @staticmethod
+    def _pre_order_mirrored(root: TreeNode) -> list[TreeNode]:
+        """Node, then children right to left: reversed, children come before their parent."""
+        out, stack = [], [root]
+        while stack:
+            node = stack.pop()
+            out.append(node)
+            stack.extend(node.children_nodes())
+        return out
 
     # -- misc ----------------------------------------------------------------------------------
     def __repr__(self) -> str:

@@ -271,7 +271,8 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(str(exc)) from None
         virtual = args.driver == "sim" and not args.realtime
         try:
-            run_loop(_run_async(args, tree_path, config, registrations, console, held), virtual=virtual)
+            run_loop(_run_async(args, tree_path, config, registrations, console, held), virtual=virtual,
+                     signals=True)  # SIGTERM/SIGINT/SIGHUP end like Ctrl-C: through runtime.stop()
         except KeyboardInterrupt:
             print("interrupted", file=sys.stderr)
             if "summary" not in held:

@@ -34,6 +34,7 @@ from .context import RuntimeContext
 from .driver import RobotDriver
 from .gate import DecisionGate
 from .messages import RobotInfo
+from .shutdown import register_live, settle, unregister_live
 from .supervisor import SystemSupervisor
 from .tick_loop import TickLoop
 from .watchdog import LoopWatchdog
@@ -173,7 +174,10 @@ class AutonomyRuntime:
         self._service_tasks = [spawn(self.supervisor.run(), name="supervisor"),
                                spawn(self.backup.run(), name="backup"),
                                spawn(self.gate.run(), name="gate")]
+        for task in self._service_tasks:
+            task.add_done_callback(self._watch_service)
         self.running = True
+        register_live(self)
         if self.watchdog is not None:
             self.gate.watchdog = self.watchdog
             self.watchdog.start()
@@ -200,7 +204,7 @@ class AutonomyRuntime:
         if task is not None and not task.done():
             task.cancel()
         if self.tree is not None:
-            self.tree.halt_tree()
+            self._halt_tree_logged()
         self.completed = self.loop.create_future()
         self.supervisor.set_watched("tree", True)
         self.gate.heartbeat()
@@ -215,8 +219,7 @@ class AutonomyRuntime:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
         if self.tree is not None:
-            with contextlib.suppress(Exception):
-                self.tree.halt_tree()
+            self._halt_tree_logged()
         self._start_tick_task()
         return True
 
@@ -230,27 +233,52 @@ class AutonomyRuntime:
         return self.summary()
 
     async def stop(self) -> None:
-        """Stop ticking, halt the tree (cancelling async actions), send a final zero, stop the driver."""
+        """Zero the base at once, stop ticking, halt the tree (cancelling async actions), send
+        the final zero and stop the driver. Bounded: tasks that ignore cancellation are
+        abandoned after ``config.shutdown_timeout`` with a warning naming them (the node, for
+        an AsyncActionNode), and so is a driver that does not stop in time."""
         if not self.running:
             return
         self.running = False
-        tasks = [t for t in (self._tick_task, *self._service_tasks) if t is not None]
-        for task in tasks:
-            task.cancel()
-        for task in tasks:
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
+        timeout = self.config.shutdown_timeout
+        self.gate.shutdown()  # zero first: nothing below may delay it
+        await settle([t for t in (self._tick_task, *self._service_tasks) if t is not None], timeout,
+                     what="runtime stop")
         if self.tree is not None:
-            try:
-                self.tree.halt_tree()
-            except Exception as exc:
-                log.error("halt_error", error=str(exc))
-        self.gate.shutdown()
+            node_tasks = [t for t in asyncio.all_tasks(self.loop) if t.get_name().startswith("bt:")]
+            self._halt_tree_logged()
+            await settle(node_tasks, timeout, what="halting the tree")
+        self.gate.shutdown()  # the last word: the 'runtime stopped' e-stop holds every later output at zero
+        if self.watchdog is not None:
+            self.watchdog.stop()
         self.supervisor.detach()
         self.gate.detach()
         self.backup.detach()
-        await self.driver.stop()
+        try:
+            await asyncio.wait_for(self.driver.stop(), timeout)
+        except TimeoutError:
+            log.warning("driver_stop_abandoned", driver=getattr(self.driver, "name", "?"),
+                        reason=f"did not stop within {timeout:.1f} s")
+        except Exception as exc:
+            log.error("driver_stop_failed", error=repr(exc))
+        unregister_live(self)
         log.info("runtime_stopped", sim_time=round(self.clock(), 3))
+
+    def _halt_tree_logged(self) -> None:
+        """Halt the tree; a node that fails to halt is logged (every node is halted anyway)."""
+        try:
+            self.tree.halt_tree()
+        except Exception as exc:
+            log.error("halt_error", error=str(exc), error_type=type(exc).__name__)
+
+    def _watch_service(self, task: asyncio.Task) -> None:
+        """A service task (supervisor, backup, gate) that dies stops the robot: without it the
+        runtime is not what it promises."""
+        if task.cancelled() or not self.running:
+            return
+        exc = task.exception()
+        log.error("service_crashed", service=task.get_name(), error=repr(exc))
+        self.gate.emergency_stop(f"{task.get_name()} crashed")
 
     async def __aenter__(self) -> AutonomyRuntime:
         await self.start()

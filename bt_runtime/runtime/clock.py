@@ -92,12 +92,14 @@ def new_loop(virtual: bool) -> asyncio.AbstractEventLoop:
 
 
 def run(main: Awaitable[T] | Callable[[], Awaitable[T]], *, virtual: bool = True,
-        debug: bool | None = None) -> T:
-    """Run a coroutine on a fresh loop, virtual (default) or real-time."""
+        debug: bool | None = None, signals: bool = False) -> T:
+    """Run a coroutine on a fresh loop, virtual (default) or real-time. With ``signals``,
+    SIGTERM/SIGINT/SIGHUP end it through its own cleanup (``shutdown.run_main``); leftover
+    tasks never block the exit."""
+    from .shutdown import run_main
+
     factory: Callable[[], Any] = VirtualTimeLoop if virtual else asyncio.new_event_loop
-    coro = main() if callable(main) else main
-    with asyncio.Runner(debug=debug, loop_factory=factory) as runner:
-        return runner.run(coro)
+    return run_main(main, loop_factory=factory, signals=signals, debug=debug)
 
 
 class VirtualTimePolicy(asyncio.DefaultEventLoopPolicy):

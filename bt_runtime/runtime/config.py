@@ -86,3 +86,5 @@ class RuntimeConfig(_Model):
     supervisor: SupervisorConfig = Field(default_factory=SupervisorConfig)
     backup: BackupConfig = Field(default_factory=BackupConfig)
     gate: GateConfig = Field(default_factory=GateConfig)
+    shutdown_timeout: float = Field(2.0, gt=0, description="at stop, tasks that ignore cancellation (and a "
+                                                           "driver that does not stop) are abandoned after this")

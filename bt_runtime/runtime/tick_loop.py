@@ -154,6 +154,11 @@ class TickLoop:
             if gate is not None:
                 gate.after_tick()
             return self.status
+        except BaseException as exc:  # KeyboardInterrupt/SystemExit from a node: stop the robot, let it through
+            log.error("tick_interrupted", error_type=type(exc).__name__, error=str(exc))
+            if gate is not None:
+                gate.emergency_stop(f"tick interrupted ({type(exc).__name__})")
+            raise
         self.stats.add(lateness, time.perf_counter() - t0)
         if gate is not None:
             gate.after_tick()
