@@ -1,5 +1,5 @@
-"""Sensor drivers: lidar ``scan``, ``imu``, wheel ``odom``, ``bumper``, ``battery`` and the
-AMCL-like ``pose`` (component ``localization``). Each is a :class:`~sim.components.Driver`
+"""Sensor drivers: lidar ``scan``, ``imu``, wheel ``odom``, ``bumper`` and ``battery`` (the
+AMCL-like ``pose``, component ``localization``, is in ``sim.localization``). Each is a :class:`~sim.components.Driver`
 polled by the simulator's physics task; each draws its noise from its own random stream.
 
 Frames: ``scan`` beams are in the sensor frame (angle 0 = the robot's forward axis; the sensor
@@ -22,7 +22,6 @@ from bt_runtime.runtime.messages import (
     Contact,
     Imu,
     LaserScan,
-    LocalizedPose,
     Odometry,
     Pose2D,
     Twist,
@@ -191,6 +190,10 @@ class OdomDriver(Driver):
         self.v = d / dt
         self.w = dth / dt
 
+    def on_activate(self) -> None:
+        # a restarted base driver counts from zero again, as a real one does
+        self.x = self.y = self.yaw = self.v = self.w = 0.0
+
     def pose(self) -> Pose2D:
         return Pose2D(self.x, self.y, self.yaw)
 
@@ -323,61 +326,3 @@ def compose(a: Pose2D, b: Pose2D) -> Pose2D:
 def inverse(a: Pose2D) -> Pose2D:
     c, s = math.cos(a.yaw), math.sin(a.yaw)
     return Pose2D(-c * a.x - s * a.y, s * a.x - c * a.y, wrap_angle(-a.yaw))
-
-
-class LocalizationDriver(Driver):
-    """AMCL-like map-frame pose. While the lidar delivers good scans the estimate is ground
-    truth plus a slowly varying (AR(1)) error, and the map->odom transform is refreshed;
-    without scans it dead-reckons on odometry through the last transform (drifting with the
-    odometry's errors, growing covariance). It needs odometry: while the odom driver is down
-    (or silent) the pose stops updating."""
-
-    def __init__(self, sim: Simulator, **kw) -> None:
-        spec = sim.profile.localization
-        super().__init__(sim, "localization", "pose", spec.rate_hz, **kw)
-        self.spec = spec
-        self._noise = _NoiseBuffer(self.rng)
-        self.ex = self.ey = self.eyaw = 0.0
-        self.map_odom = sim.spawn  # odom starts at the spawn pose
-        self.covariance = spec.sigma_xy ** 2
-        self.estimate: Pose2D = sim.spawn
-
-    def _odom_ok(self, now: float) -> bool:
-        odom = self.sim.odom
-        return odom.state is ACTIVE and now >= odom.silent_until and now >= odom.stale_until
-
-    def _lidar_ok(self, now: float) -> bool:
-        lidar = self.sim.lidar
-        return (lidar.state is ACTIVE and now >= lidar.silent_until and now >= lidar.stale_until
-                and now >= lidar.corrupt_until)
-
-    def sample(self, now: float) -> LocalizedPose | None:
-        sim = self.sim
-        if not self._odom_ok(now):
-            return None
-        odom_pose = sim.odom.pose()
-        if self._lidar_ok(now):
-            s = self.spec
-            rho = s.correlation
-            q = math.sqrt(1 - rho * rho)
-            k = self.noise_scale(now)
-            nz = self._noise
-            self.ex = rho * self.ex + q * s.sigma_xy * k * nz()
-            self.ey = rho * self.ey + q * s.sigma_xy * k * nz()
-            self.eyaw = rho * self.eyaw + q * s.sigma_yaw * k * nz()
-            phys = sim.physics
-            est = Pose2D(phys.x + self.ex, phys.y + self.ey, wrap_angle(phys.angle + self.eyaw))
-            self.map_odom = compose(est, inverse(odom_pose))
-            self.covariance = s.sigma_xy ** 2
-        else:
-            est = compose(self.map_odom, odom_pose)
-            self.covariance += 0.0025 / self.rate_hz  # grows ~ (5 cm)^2 per second
-        self.estimate = est
-        return LocalizedPose(now, est, self.covariance)
-
-    def corrupt(self, msg: LocalizedPose, mode: str) -> LocalizedPose:
-        if mode == "nan":
-            return LocalizedPose(msg.stamp, Pose2D(math.nan, math.nan, math.nan), math.nan)
-        g = self.garbage
-        return LocalizedPose(msg.stamp, Pose2D(msg.pose.x + g(5.0), msg.pose.y + g(5.0), g(math.pi)),
-                             msg.covariance)

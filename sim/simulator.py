@@ -38,9 +38,10 @@ from pydantic import BaseModel, ConfigDict, Field
 from bt_runtime.runtime.messages import ComponentInfo, ComponentState, Pose2D, Twist
 
 from .bus import Bus
-from .components import Component
+from .components import ACTIVE, Component
 from .faults import FaultInjector
 from .geometry import RayCaster, wrap_angle
+from .localization import LocalizationDriver
 from .physics import DiffDriveBase, PhysicsWorld
 from .robot import RobotProfile, load_profile
 from .sensors import (
@@ -49,7 +50,6 @@ from .sensors import (
     BumperDriver,
     ImuDriver,
     LidarDriver,
-    LocalizationDriver,
     OdomDriver,
 )
 from .world import World, lidar_geometry, load_world, rasterize_obstacles
@@ -284,10 +284,13 @@ class Simulator:
         imu = self.imu
         a_fwd, a_left = c * axw + s * ayw, -s * axw + c * ayw
         imu.accumulate(a_fwd, a_left, phys.wz, dt)
-        if v != 0.0 or w != 0.0:
-            self.odom.integrate(v, w, dt, now)
+        odom = self.odom
+        if odom.state is not ACTIVE:
+            pass  # a crashed (or starting) odometry driver integrates nothing
+        elif v != 0.0 or w != 0.0:
+            odom.integrate(v, w, dt, now)
         else:
-            self.odom.v = self.odom.w = 0.0
+            odom.v = odom.w = 0.0
         self.battery.integrate(v, w, dt, now)
         if phys.contacts or self._touching or self._synthetic:
             self._update_contacts(now, c, s, math.hypot(pvx, pvy))
@@ -411,8 +414,7 @@ class Simulator:
         o = self.odom
         o.x = o.y = o.yaw = o.v = o.w = 0.0
         self.imu.yaw = 0.0
-        self.localization.map_odom = pose
-        self.localization.estimate = pose
+        self.localization.reset(pose)
         self.record_event("reset_pose", x=pose.x, y=pose.y, yaw=pose.yaw)
 
     # --- components ---------------------------------------------------------------------------
