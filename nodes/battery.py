@@ -2,8 +2,9 @@
 
 Energy follows the paper's linear power model (idle + driving terms) over the time needed to
 drive the planned path (or the straight line times a detour factor when no path is known),
-with a safety factor for stops and detours. The model's constants come from the driver's
-robot information (``context.robot``) and can be overridden per node.
+with a safety factor for stops and detours. The model starts from the nominal constants the
+driver gives (``context.robot``) and is corrected online from the measured state of charge
+(``nodes.energy``), with an uncertainty margin; it never sees the simulator's constants.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from bt_runtime import ConditionNode, NodeStatus, SyncActionNode
 from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.messages import BatteryState, Path, Pose2D, wrap_angle
 
+from .energy import energy_model
 from .robot import robot_pose
 from .types import PATH, POSE
 
@@ -52,7 +54,13 @@ class BatteryCanReach(ConditionNode):
                 input_port("detour_factor", float, 1.5, "used without a path"),
                 input_port("speed", float, 0.0, "m/s (0: the robot's nominal speed)"),
                 output_port("required", float, "{battery_required}", "percent needed incl. reserve"),
-                output_port("available", float, "{battery_available}", "percent now")]
+                output_port("available", float, "{battery_available}", "percent now"),
+                output_port("energy_factor", float, "{battery_energy_factor}",
+                            "learned consumption / nominal, with the margin")]
+
+    def __init__(self, name, config=None):
+        super().__init__(name, config)
+        self._model = energy_model(self.context)  # starts learning now, not at the first goal
 
     def tick(self):
         ctx = self.context
@@ -70,6 +78,9 @@ class BatteryCanReach(ConditionNode):
             length = pose.distance_to(goal) * self.get_input("detour_factor")
             turning = math.pi
         energy = energy_for_path(length, turning, speed, min(robot.max_angular, 1.0), robot)
+        if self._model is not None:
+            energy = self._model.energy(energy)
+            self.set_output("energy_factor", self._model.factor)
         voltage = battery.voltage if battery.voltage > 0 else None
         required = robot.percent_for(energy, voltage) * self.get_input("safety_factor") + self.get_input("reserve")
         self.set_output("required", required)

@@ -232,7 +232,7 @@ class SimRobot:
         return idl.BatteryState(header=_header("base_link"), voltage=m.voltage, current=-m.current,
                                 charge=math.nan, capacity=m.capacity_ah, design_capacity=m.capacity_ah,
                                 percentage=m.percentage / 100.0, present=True,
-                                power_supply_status=2 if m.current > 0 else 1)
+                                power_supply_status=1 if m.current < 0 else 2)
 
     @staticmethod
     def _twist(m: Any) -> idl.Twist:

@@ -254,16 +254,26 @@ class BumperDriver(Driver):
 
 # ---------------------------------------------------------------------------------------------
 class BatteryModel:
-    """State of charge integrated every physics step (the battery drains whether or not its
-    driver publishes). Charging while docked (within ``dock_radius`` of the dock, not moving)."""
+    """The battery's truth: state of charge integrated every physics step (it drains whether or
+    not its driver publishes), charging while docked (within ``dock_radius`` of the dock, not
+    moving). This robot's consumption constants differ from the profile's nominal values by up
+    to ``variation`` (drawn once per run from the seed), as two units of one model do; the
+    autonomy layer is told only the nominal values."""
+
+    variation = 0.10
 
     def __init__(self, sim: Simulator) -> None:
         self.sim = sim
         self.spec = sim.profile.battery
+        rng = sim.rng("battery/consumption")
+        spread = self.variation
+        self.idle_power_w, self.k_linear, self.k_angular = (
+            nominal * float(rng.uniform(1.0 - spread, 1.0 + spread))
+            for nominal in (self.spec.idle_power_w, self.spec.k_linear, self.spec.k_angular))
         self.soc = self.spec.initial_soc
         self.extra_power = 0.0  # W, the drain fault
         self.extra_until = math.inf
-        self.power = self.spec.idle_power_w
+        self.power = self.idle_power_w
         self.charging = False
         self.dock_radius = 0.25
         self.depleted = self.soc <= 0.0
@@ -276,7 +286,7 @@ class BatteryModel:
         if now >= self.extra_until:
             self.extra_power = 0.0
             self.extra_until = math.inf
-        power = spec.idle_power_w + spec.k_linear * abs(v) + spec.k_angular * abs(w) + self.extra_power
+        power = self.idle_power_w + self.k_linear * abs(v) + self.k_angular * abs(w) + self.extra_power
         dock = self.sim.dock
         charging = False
         if dock is not None and v == 0.0 and w == 0.0:
@@ -299,15 +309,25 @@ class BatteryModel:
 
 
 class BatteryDriver(Driver):
+    """A battery monitor as small robots have: voltage and state of charge, both with
+    measurement noise; no current or power sensor (NaN), except the charger's current while
+    docked (negative: flowing in)."""
+
+    voltage_sigma = 0.02  # V
+    soc_sigma = 0.1  # percentage points
+
     def __init__(self, sim: Simulator, **kw) -> None:
         super().__init__(sim, "battery", "battery", sim.profile.battery.rate_hz, **kw)
         self.model = sim.battery
+        self._noise = _NoiseBuffer(self.rng)
 
     def sample(self, now: float) -> BatteryState:
         m = self.model
-        volts = m.voltage()
-        net = m.power - (m.spec.charge_power_w if m.charging else 0.0)
-        return BatteryState(now, volts, m.soc, net / volts, m.power, m.spec.capacity_ah)
+        nz = self._noise
+        volts = m.voltage() + self.voltage_sigma * nz()
+        soc = min(max(m.soc + self.soc_sigma * nz(), 0.0), 100.0)
+        current = -m.spec.charge_power_w / volts if m.charging else math.nan
+        return BatteryState(now, volts, soc, current, math.nan, m.spec.capacity_ah)
 
     def corrupt(self, msg: BatteryState, mode: str) -> BatteryState:
         if mode == "nan":

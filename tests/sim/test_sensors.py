@@ -211,15 +211,31 @@ def test_battery_integration_matches_the_model():
     sim = Simulator(open_world(), profile, seed=0)
     rec = run_sim(sim, lambda s: asyncio.sleep(100.0 + 1e-6), ["battery"])
     b = profile.battery
+    idle = sim.battery.idle_power_w  # this unit's truth, not the profile's nominal value
+    assert idle != b.idle_power_w and abs(idle / b.idle_power_w - 1) <= 0.1
     soc = b.initial_soc
     for _ in range(10000):
-        soc = soc_after(soc, b.idle_power_w, b.voltage(soc), b.capacity_ah, 0.01)
+        soc = soc_after(soc, idle, b.voltage(soc), b.capacity_ah, 0.01)
+    assert sim.battery.soc == pytest.approx(soc, rel=1e-9)
     last = rec["battery"][-1]
     assert len(rec["battery"]) == 100
-    assert last.percentage == pytest.approx(soc, rel=1e-9)
-    assert last.power == b.idle_power_w and last.current == pytest.approx(b.idle_power_w / last.voltage)
+    assert last.percentage == pytest.approx(soc, abs=0.5)  # measured, with noise
+    readings = [m.percentage for m in rec["battery"]]
+    assert any(a < b for a, b in zip(readings, readings[1:]))  # noise: not monotone
+    assert math.isnan(last.power) and math.isnan(last.current)  # no current or power sensor
     # and that is (close to) the paper's formula with a constant voltage
-    assert 100 - last.percentage == pytest.approx(6.0 / 12.6 * 100 / 3600 / 1.8 * 100, rel=0.01)
+    assert 100 - sim.battery.soc == pytest.approx(idle / 12.6 * 100 / 3600 / 1.8 * 100, rel=0.01)
+
+
+def test_battery_consumption_differs_per_seed_within_ten_percent():
+    nominal = load_profile("rosbot2").battery
+    units = [Simulator(open_world(), "rosbot2", seed=seed).battery for seed in range(8)]
+    for name in ("idle_power_w", "k_linear", "k_angular"):
+        values = [getattr(u, name) for u in units]
+        assert len(set(values)) == 8
+        assert all(abs(v / getattr(nominal, name) - 1) <= 0.1 for v in values)
+    again = Simulator(open_world(), "rosbot2", seed=3).battery
+    assert again.k_linear == units[3].k_linear  # seeded
 
 
 def test_battery_draws_more_when_driving_and_charges_at_the_dock():
@@ -243,8 +259,7 @@ def test_battery_draws_more_when_driving_and_charges_at_the_dock():
     assert soc_idle > 50.0  # charging while docked
     assert sim.events_of("charging_started")
     assert soc_drive < soc_idle  # driving (off the dock) drains it
-    powers = [m.power for m in rec["battery"]]
-    assert max(powers) == pytest.approx(6.0 + 12.0 * 0.2)
+    assert any(m.current < 0 for m in rec["battery"])  # the charger's current while docked
 
 
 def test_depleted_battery_stops_the_base():
