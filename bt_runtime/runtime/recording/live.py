@@ -27,7 +27,7 @@ class FoxgloveLive:
         self._lock = threading.Lock()
         self._last_time_ns = -(2**62)
         self.server = foxglove.start_server(name=name, host=host, port=port, context=channels.context,
-                                            capabilities=[Capability.Time], server_listener=self)
+                                            capabilities=[Capability.Time], server_listener=_listener(self))
         self.host = host
         self.port = self.server.port
 
@@ -47,10 +47,21 @@ class FoxgloveLive:
     def close(self) -> None:
         self.server.stop()
 
-    # -- server listener (called from the SDK's thread) --------------------------------------------
-    def on_subscribe(self, client: Any, channel: Any) -> None:
+    def resend_latched(self, topic: str) -> None:
         with self._lock:
-            last = self._latched.get(channel.topic)
+            last = self._latched.get(topic)
         if last is not None:
             ch, t_ns, data = last
             ch.log(data, log_time=t_ns)
+
+
+def _listener(live: FoxgloveLive) -> Any:
+    """The server's callbacks (on the SDK's thread): a new subscriber of a latched topic gets
+    its last message. The SDK's ServerListener protocol class supplies no-op defaults."""
+    from foxglove.websocket import ServerListener
+
+    class Listener(ServerListener):
+        def on_subscribe(self, client: Any, channel: Any) -> None:
+            live.resend_latched(channel.topic)
+
+    return Listener()

@@ -1,0 +1,101 @@
+"""``run --foxglove``: a client of the Foxglove WebSocket protocol connects on loopback,
+subscribes, and receives /cmd_vel and /behavior_tree_log as ROS 2 CDR."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import re
+import signal
+import struct
+import subprocess
+import sys
+import time
+
+import pytest
+
+from tests.paths import ROOT
+
+pytest.importorskip("foxglove")
+websockets = pytest.importorskip("websockets.asyncio.client")
+
+WANTED = {"/cmd_vel": "geometry_msgs/msg/Twist", "/behavior_tree_log": "nav2_msgs/msg/BehaviorTreeLog"}
+
+
+def _wait_for_url(proc: subprocess.Popen, timeout: float = 120.0) -> str:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        found = re.search(r"foxglove: (ws://\S+)", line)
+        if found:
+            return found.group(1)
+    raise AssertionError("no 'foxglove: ws://...' line on stderr")
+
+
+async def _receive(url: str) -> dict[str, list[bytes]]:
+    got: dict[str, list[bytes]] = {}
+    subs: dict[int, str] = {}
+    channels: dict[str, int] = {}
+
+    async def subscribe(ws, topics) -> None:
+        batch = []
+        for topic in topics:
+            sub_id = len(subs) + 1
+            subs[sub_id] = topic
+            batch.append({"id": sub_id, "channelId": channels[topic]})
+        await ws.send(json.dumps({"op": "subscribe", "subscriptions": batch}))
+
+    # foxglove-sdk speaks the Foxglove WebSocket protocol under its current name, foxglove.sdk.v1
+    async with websockets.connect(url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]) as ws:
+        assert ws.subprotocol in ("foxglove.sdk.v1", "foxglove.websocket.v1")
+        while not all(got.get(t) for t in WANTED):
+            frame = await asyncio.wait_for(ws.recv(), 30)
+            if isinstance(frame, str):
+                msg = json.loads(frame)
+                if msg["op"] == "advertise":
+                    new = []
+                    for ch in msg["channels"]:
+                        if ch["topic"] in WANTED:
+                            assert ch["encoding"] == "cdr" and ch["schemaEncoding"] == "ros2msg"
+                            assert ch["schemaName"] == WANTED[ch["topic"]]
+                            channels[ch["topic"]] = ch["id"]
+                            new.append(ch["topic"])
+                    if new:
+                        await subscribe(ws, new)
+                elif msg["op"] == "status" and "Unknown channel" in msg.get("message", ""):
+                    # the server answers a subscription that arrives right after the
+                    # advertisement before it registered the channel: ask again
+                    await asyncio.sleep(0.1)
+                    await subscribe(ws, [t for t in channels if not got.get(t)])
+            elif frame[0] == 0x01:  # message data: opcode, subscription id, log time, payload
+                sub_id, _t = struct.unpack_from("<IQ", frame, 1)
+                got.setdefault(subs[sub_id], []).append(frame[13:])
+    return got
+
+
+def test_client_receives_cmd_vel_and_tree_log(tmp_path):
+    from bt_runtime.runtime.recording.types import typestore
+
+    config = tmp_path / "rec.yaml"
+    config.write_text("tree_log: all\n")  # every tick's log, so one arrives soon after subscribing
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bt_runtime", "run", "trees/autonomy.xml", "--goal", "yard_east", "--realtime",
+         "--duration", "60", "--foxglove", "0", "--record-config", str(config), "--no-progress"],
+        cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        url = _wait_for_url(proc)
+        assert url.startswith("ws://127.0.0.1:")
+        got = asyncio.run(asyncio.wait_for(_receive(url), 90))
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+    store = typestore()
+    twist = store.deserialize_cdr(got["/cmd_vel"][0], WANTED["/cmd_vel"])
+    assert hasattr(twist.linear, "x") and hasattr(twist.angular, "z")
+    log = store.deserialize_cdr(got["/behavior_tree_log"][0], WANTED["/behavior_tree_log"])
+    assert log.event_log and log.event_log[0].current_status in ("IDLE", "RUNNING", "SUCCESS", "FAILURE")
