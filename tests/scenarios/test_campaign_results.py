@@ -91,3 +91,16 @@ def test_shards_partition_the_plan():
     for bad in ("0/4", "5/4", "2", "a/b"):
         with pytest.raises(ValueError, match="--shard"):
             parse_shard(bad)
+
+
+def test_the_cli_reports_bad_results_files_and_flags_as_usage_errors(tmp_path, capsys):
+    from bt_runtime.__main__ import main
+
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text('{"type": "run", "key": "x"}\n', encoding="utf-8")
+    assert main(["scenarios", "merge", str(bad)]) == 2
+    assert f"{bad}:1: run record without scenario" in capsys.readouterr().err
+    assert main(["scenarios", "--only", "Lidar_1", "--ray-address", "auto"]) == 2
+    assert "--ray-address needs --backend ray" in capsys.readouterr().err
+    assert main(["scenarios", "--only", "Lidar_1", "--shard", "3/2"]) == 2
+    assert "K must be between 1 and N" in capsys.readouterr().err
