@@ -10,6 +10,7 @@ variants, recording) change the specs, never the backends.
 from __future__ import annotations
 
 import socket
+import time
 import traceback
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -90,6 +91,7 @@ def execute_run(run: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
 
     quiet_logging("critical")
     result = None
+    cpu0 = time.process_time()
     try:
         result = run_scenario(run.scenario, run.mode, run.seed, keep_record=bool(run.artifacts), **run.options)
         line = result.to_dict()
@@ -99,7 +101,8 @@ def execute_run(run: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
                 "sim_time": 0.0, "wall_time": 0.0,
                 "verdicts": [{"criterion": "run_completed", "passed": False,
                               "reason": f"{type(exc).__name__}: {exc} ({where.filename}:{where.lineno})"}]}
-    line = {"type": "run", "key": run.key, "run": run.run, **line, "host": socket.gethostname()}
+    line = {"type": "run", "key": run.key, "run": run.run, **line,
+            "cpu_time": round(time.process_time() - cpu0, 4), "host": socket.gethostname()}
     artifacts: dict[str, Any] = {}
     if result is not None:
         for name, kwargs in run.artifacts.items():
