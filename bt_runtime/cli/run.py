@@ -161,7 +161,10 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
     try:
         runtime.load_tree(tree_path, tree_id=args.tree_id)
     except BehaviorTreeException as exc:
-        raise UsageError(str(exc)) from None
+        trees = runtime.factory.registered_behavior_trees()
+        hint = (f"; pick the tree to run with --tree ID (trees: {', '.join(trees)})"
+                if len(trees) > 1 and ("main_tree_to_execute" in str(exc) or args.tree_id) else "")
+        raise UsageError(f"{exc}{hint}") from None
     world = getattr(getattr(driver, "sim", None), "world", None)
     goals = [parse_goal(g, world) for g in args.goal]
     bb = runtime.tree.root_blackboard

@@ -51,7 +51,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "validate", help="load and check tree files (nodes, ports, subtrees, scripts)",
         description="Load every tree of each FILE and instantiate it; report every problem as "
                     "file:line: <element>: message. Exit status 1 if any problem was found.")
-    parser.add_argument("files", nargs="+", metavar="FILE", help="BehaviorTree.CPP v4 (or v3) XML files")
+    parser.add_argument("files", nargs="*", metavar="FILE", help="BehaviorTree.CPP v4 (or v3) XML files")
     parser.add_argument("--models", action="append", default=[], metavar="MODELS.xml",
                         help="a <TreeNodesModel> file: its node types are registered as placeholders "
                              "(ports checked, not runnable). May be repeated.")
@@ -72,6 +72,11 @@ def run(args: argparse.Namespace) -> int:
             seen.add(problem)
             problems.append(problem)
 
+    if not args.files:
+        hint = (f" --models only adds node types from a <TreeNodesModel> file; to check "
+                f"{args.models[-1]} itself: python -m bt_runtime validate {args.models[-1]}") if args.models else ""
+        print(f"python -m bt_runtime validate: error: no FILE to check.{hint}", file=sys.stderr)
+        raise SystemExit(2)  # a usage error, as argparse reports them
     try:
         node_registrations = registrations(args)
     except RegistrationError as exc:
@@ -125,6 +130,11 @@ def _read_models(paths: list[str], report) -> list[tuple[str, str]] | None:
     for path in paths:
         try:
             text = Path(path).read_text(encoding="utf-8-sig")
+            misuse = _not_a_models_file(text, path)
+            if misuse is not None:
+                report(misuse)
+                return None
+            text = _models_only(text, path)
             BehaviorTreeFactory().register_models_from_text(text, file=path)
         except OSError as exc:
             report(Problem(path, None, None, f"cannot read the models file: {exc.strerror or exc}"))
@@ -134,6 +144,31 @@ def _read_models(paths: list[str], report) -> list[tuple[str, str]] | None:
             return None
         models.append((path, text))
     return models
+
+
+def _models_only(text: str, path: str) -> str:
+    """The file without its <BehaviorTree>s (blank lines keep line numbers): a tree file that
+    also carries its models (``models --embed``) gives its models, not its trees' problems."""
+    for _element, begin, tag_end, close in reversed(_tree_spans(text, path) or []):
+        end = tag_end if close is None else text.index(">", close) + 1
+        text = text[:begin] + _blank(text[begin:end]) + text[end:]
+    return text
+
+
+def _not_a_models_file(text: str, path: str) -> Problem | None:
+    """A tree file given to --models (it holds trees but no <TreeNodesModel>) checks nothing."""
+    try:
+        doc = parse_xml_text(text, file=path)
+    except BehaviorTreeException:
+        return None  # reported by the models loader with its line
+    if doc.root.find("TreeNodesModel") is not None or doc.root.tag == "TreeNodesModel":
+        return None
+    if doc.root.find("BehaviorTree") is None:
+        return None
+    return Problem(path, doc.root.sourceline, doc.root.tag,
+                   "this is a tree file, not a models file: --models takes a file with a <TreeNodesModel> "
+                   "(node types known only by their model, e.g. Nav2's); to check this tree: "
+                   f"python -m bt_runtime validate {path}")
 
 
 def _factory(models: list[tuple[str, str]], registrations: Sequence[Callable[[Any], Any]] = ()) -> BehaviorTreeFactory:
@@ -164,6 +199,7 @@ def validate_file(file: str, models: list[tuple[str, str]], report,
 
     neutralized: set[str] = set()
     attempts = 0
+    last_problem: Problem | None = None
     while True:
         factory = _factory(models, registrations)
         try:
@@ -175,12 +211,18 @@ def validate_file(file: str, models: list[tuple[str, str]], report,
             attempts += 1
             replaced = None
             if problem.file == file and problem.line and attempts <= 256:
-                replaced = _neutralize(text, file, problem)
+                # the offending node alone first (the rest of its tree is still checked), then its tree
+                node = _neutralize_node(text, problem) if problem != last_problem else None
+                replaced = (node, set()) if node is not None else _neutralize(text, file, problem)
+            last_problem = problem
             if replaced is None:
                 return 0
             text, ids = replaced
             neutralized |= ids
 
+    main_problem = _main_tree_problem(text, file, factory.registered_behavior_trees())
+    if main_problem is not None:
+        report(main_problem)
     checked = 0
     for tree_id in factory.registered_behavior_trees():
         if tree_id in neutralized:
@@ -220,7 +262,69 @@ def _literal_problems(tree: Any, file: str) -> list[Problem]:
     return problems
 
 
-# -- replacing a tree that failed to load --------------------------------------------------------
+def _main_tree_problem(text: str, file: str, tree_ids: Sequence[str]) -> Problem | None:
+    """``main_tree_to_execute`` must name a tree of the file (or of its includes)."""
+    try:
+        doc = parse_xml_text(text, file=file)
+    except BehaviorTreeException:
+        return None
+    main = doc.root.get("main_tree_to_execute")
+    if not main or main in tree_ids:
+        return None
+    import difflib
+
+    close = difflib.get_close_matches(main, list(tree_ids), n=1)
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    return Problem(file, doc.root.sourceline, doc.root.tag,
+                   f'main_tree_to_execute="{main}" names no tree of this file (trees: '
+                   f'{", ".join(tree_ids) or "none"}){hint}')
+
+
+# -- replacing a node or a tree that failed to load -----------------------------------------------
+
+def _neutralize_node(text: str, problem: Problem) -> str | None:
+    """Replace the element the problem names, on its line, by ``<AlwaysFailure/>`` (blank
+    lines keep every line number), so the next load reports the tree's next problem."""
+    if not problem.element or problem.element in ("BehaviorTree", "root", "include", "TreeNodesModel"):
+        return None
+    line_start = 0
+    for _ in range((problem.line or 1) - 1):
+        line_start = text.find("\n", line_start) + 1
+        if line_start == 0:
+            return None
+    line_end = text.find("\n", line_start)
+    line_end = len(text) if line_end < 0 else line_end
+    m = re.compile(r"<" + re.escape(problem.element) + r"(?=[\s/>])").search(text, line_start, line_end)
+    if m is None:
+        return None
+    tag_end = _start_tag_end(text, m.start())
+    if tag_end is None:
+        return None
+    if text[tag_end - 2] == "/":
+        end = tag_end
+    else:
+        end = _matching_close(text, problem.element, tag_end)
+        if end is None:
+            return None
+    return text[:m.start()] + _PLACEHOLDER + _blank(text[m.start():end]) + text[end:]
+
+
+def _matching_close(text: str, tag: str, pos: int) -> int | None:
+    """Index just past the end tag closing the element of ``tag`` whose content starts at ``pos``."""
+    pattern = re.compile(r"<(/?)" + re.escape(tag) + r"(?=[\s/>])")
+    depth = 1
+    for m in pattern.finditer(text, pos):
+        if m.group(1):
+            depth -= 1
+            if depth == 0:
+                return text.index(">", m.end()) + 1
+            continue
+        tag_end = _start_tag_end(text, m.start())
+        if tag_end is not None and text[tag_end - 2] != "/":
+            depth += 1
+    return None
+
+
 
 _BT_OPEN = re.compile(r"<BehaviorTree\b")
 _BT_CLOSE = re.compile(r"</BehaviorTree\s*>")

@@ -101,3 +101,22 @@ def test_png_draws_the_run(tmp_path, capsys):
     c, r = (int(round(v)) for v in layout.px(1.0, -2.47))  # the straight middle of the drive (pixel test)
     column = img[r - 12:r + 13, c]
     assert (np.abs(column - np.array((30, 90, 220))).sum(axis=-1) < 30).any()
+
+
+def test_a_groot2_project_file_runs(tmp_path, capsys):
+    """A Groot2 project (.btproj: <include>s plus the node models) validates and runs; with two
+    trees and no main_tree_to_execute, run names them and asks for --tree."""
+    for tree_id in ("MainTree", "Other"):
+        (tmp_path / f"{tree_id}.xml").write_text(
+            f'<root BTCPP_format="4"><BehaviorTree ID="{tree_id}"><Sequence><Script code="x := 1"/>'
+            f'<AlwaysSuccess/></Sequence></BehaviorTree></root>')
+    project = tmp_path / "project.btproj"
+    project.write_text('<?xml version="1.0" encoding="UTF-8"?>\n<root BTCPP_format="4" project_name="P">\n'
+                       '  <include path="MainTree.xml"/>\n  <include path="Other.xml"/>\n'
+                       '  <TreeNodesModel><Action ID="Say"><input_port name="message"/></Action></TreeNodesModel>\n'
+                       '</root>\n')
+    assert main(["validate", str(project)]) == 0
+    assert main(["run", str(project), "--no-progress"]) == 2
+    assert "pick the tree to run with --tree ID (trees: MainTree, Other)" in capsys.readouterr().err
+    code, data = _run(tmp_path, str(project), "--tree", "Other")
+    assert code == 0 and data["status"] == "SUCCESS"

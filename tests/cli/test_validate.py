@@ -249,3 +249,43 @@ def test_usage_errors(capsys):
         main(["--help"])
     assert exc.value.code == 0
     assert "validate" in capsys.readouterr().out
+
+
+def test_every_problem_inside_one_tree_and_a_missing_main_tree(tmp_path, capsys):
+    path = write(tmp_path, "bad.xml", """<root BTCPP_format="4" main_tree_to_execute="Mian">
+  <BehaviorTree ID="Main">
+    <Sequence>
+      <Unknown1/>
+      <AlwaysSuccess/>
+      <Unknown2><AlwaysSuccess/></Unknown2>
+      <Delay delay_msec="abc"><AlwaysSuccess/></Delay>
+    </Sequence>
+  </BehaviorTree>
+</root>
+""")
+    code, out, _ = run(capsys, str(path))
+    assert code == 1
+    lines = out.strip().splitlines()
+    assert lines[0] == (f'{path}:1: <root>: main_tree_to_execute="Mian" names no tree of this file (trees: Main); '
+                        "did you mean 'Main'?")
+    assert [line.split(": ", 1)[0] for line in lines[1:]] == [f"{path}:4", f"{path}:6", f"{path}:7"]
+    assert "Unknown1" in lines[1] and "Unknown2" in lines[2] and "delay_msec" in lines[3]
+
+
+def test_a_tree_file_given_to_models_is_explained(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["validate", "--models", str(DEMO)])
+    assert exc.value.code == 2
+    assert f"to check {DEMO} itself: python -m bt_runtime validate {DEMO}" in capsys.readouterr().err
+    tree = write(tmp_path, "tree.xml", '<root BTCPP_format="4"><BehaviorTree ID="T"><AlwaysSuccess/>'
+                                       '</BehaviorTree></root>')
+    code, out, _ = run(capsys, "--models", str(tree), str(DEMO))
+    assert code == 1 and "this is a tree file, not a models file" in out
+
+
+def test_a_tree_file_with_embedded_models_gives_its_models(capsys):
+    """trees/autonomy.xml carries its models (models --embed): as --models it gives those,
+    so the tree validates with no node library registered."""
+    autonomy = str(ROOT / "trees" / "autonomy.xml")
+    code, out, _ = run(capsys, "--no-nodes", "--models", autonomy, autonomy)
+    assert code == 0, out
