@@ -448,6 +448,16 @@ def cast_value(value: Any, target: PortType) -> Any:
                          f"[{type_of_value(value).name}] and [{target.name}]")
 
 
+def polymorphic(stored: PortType, wanted: PortType) -> bool:
+    """Whether an entry of user class ``stored`` may feed an input port of user class
+    ``wanted``: one derives from the other (BT.CPP 4.10's polymorphic ports, which need a
+    registered cast; a Python class carries its hierarchy). An upcast always succeeds; a
+    downcast is checked on each read (``isinstance``), as BT.CPP's dynamic_pointer_cast."""
+    a, b = stored.py_type, wanted.py_type
+    return (stored.kind == wanted.kind == "custom" and isinstance(a, type) and isinstance(b, type)
+            and (issubclass(a, b) or issubclass(b, a)))
+
+
 def _wrap(value: int, bits: int, signed: bool) -> int:
     """``static_cast`` of an integer to a ``bits``-wide (un)signed integer: two's complement."""
     value &= (1 << bits) - 1

@@ -29,6 +29,7 @@ from ..ports import (
     is_allowed_port_name,
     is_strict_blackboard_pointer,
     parse_bool,
+    polymorphic,
 )
 from ..status import PortDirection
 from ..timers import TimerQueue, WakeUpSignal
@@ -239,7 +240,8 @@ class TreeBuilder:
                 if existing is not None:
                     et = existing.type
                     if (et.strongly_typed and ptype.strongly_typed and et != ptype
-                            and et.kind != "string"):
+                            and et.kind != "string"
+                            and not (port.direction is PortDirection.INPUT and polymorphic(et, ptype))):
                         raise self._err(doc, elem, f"The creation of the tree failed because the port "
                                                    f"[{name}] was initially created with type [{et.name}] "
                                                    f"and, later type [{ptype.name}] was used somewhere else.")
