@@ -206,9 +206,27 @@ class Ros2Driver:
         return unsubscribe
 
     def send_velocity(self, linear: float, angular: float) -> None:
+        if self._write_cmd(linear, angular):
+            for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
+                callback(Twist(float(linear), float(angular)))
+
+    def emergency_zero(self) -> None:
+        """Write a zero ``cmd_vel`` from any thread (Cyclone's writers are thread-safe); the
+        ``cmd_vel_out`` subscribers hear of it on the loop."""
+        if self._write_cmd(0.0, 0.0):
+            loop = self.loop
+            if loop is not None and not loop.is_closed():
+                with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
+                    loop.call_soon_threadsafe(self._announce_zero)
+
+    def _announce_zero(self) -> None:
+        for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
+            callback(Twist(0.0, 0.0))
+
+    def _write_cmd(self, linear: float, angular: float) -> bool:
         writer = self._cmd_writer
         if writer is None:
-            return
+            return False
         twist = idl.Twist(linear=idl.Vector3(float(linear), 0.0, 0.0), angular=idl.Vector3(0.0, 0.0, float(angular)))
         try:
             if self._cmd_type is idl.TwistStamped:
@@ -222,9 +240,8 @@ class Ros2Driver:
             self.send_errors += 1
             if self.send_errors == 1 or self.send_errors % 1000 == 0:
                 log.error("ros2_cmd_vel_failed", error=repr(exc), errors=self.send_errors)
-            return
-        for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
-            callback(Twist(float(linear), float(angular)))
+            return False
+        return True
 
     # -- components ------------------------------------------------------------------------------
     def _timeout(self, name: str) -> float:
