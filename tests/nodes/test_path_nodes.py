@@ -1,0 +1,105 @@
+"""Path nodes (fn_req7, fn_req8): rating a planned path, and searching a reachable goal nearby."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bt_runtime.runtime.messages import ActionStatus, NavErrorCode, NavResult, Path, Pose2D
+from bt_runtime.status import NodeStatus
+from nodes import register_autonomy_nodes
+from nodes.path import ring_candidates
+from nodes.robot import POSE_TIMEOUT
+from tests.nodes.nav2.support import build, fake_context
+
+S, F = NodeStatus.SUCCESS, NodeStatus.FAILURE
+GOAL = Pose2D(2.0, 0.0)
+
+
+def _line(*xy: tuple[float, float]) -> Path:
+    return Path(0.0, np.array([[x, y, 0.0] for x, y in xy]))
+
+
+def _rate(path, *, valid=True, clearance=1.0, pose=(0.0, 0.0), pose_age=0.0, **attrs):
+    ctx = fake_context()
+    if pose is not None:
+        ctx.backup.pose(*pose)
+    ctx.clock.advance(pose_age)
+    ctx.navigation.valid = valid
+    ctx.navigation.path_clearance = lambda _path: clearance
+    extra = "".join(f' {k}="{v}"' for k, v in attrs.items())
+    tree, _ = build(f'<RatePathQuality path="{{path}}" goal="{{goal}}"{extra}/>', ctx,
+                    register=(register_autonomy_nodes,), bb_init={"path": path, "goal": GOAL})
+    status = tree.tick_once()
+    return status, tree.root_blackboard.get("path_quality")
+
+
+def test_a_straight_clear_path_is_perfect():
+    assert _rate(_line((0, 0), (1, 0), (2, 0))) == (S, pytest.approx(1.0))
+
+
+def test_quality_falls_with_detour_and_closeness_to_obstacles():
+    status, detour = _rate(_line((0, 0), (0, 1), (2, 1), (2, 0)))  # 4 m for 2 m
+    assert status is S and detour == pytest.approx(0.5)
+    status, tight = _rate(_line((0, 0), (2, 0)), clearance=0.1)  # 0.1 m of 0.5 m wanted
+    assert status is S and tight == pytest.approx(0.2)
+
+
+def test_limits_fail_the_path():
+    assert _rate(_line((0, 0), (0, 3), (2, 3), (2, 0)), max_length_ratio=3.0)[0] is F  # 8 m for 2 m
+    assert _rate(_line((0, 0), (2, 0)), clearance=0.1, min_clearance=0.2)[0] is F
+    assert _rate(_line((0, 0), (2, 0)), valid=False) == (F, 0.0)  # blocked on the costmap
+
+
+@pytest.mark.parametrize("case", ["one pose", "no pose", "stale pose"])
+def test_nothing_to_rate_is_unusable(case):
+    path = _line((0, 0)) if case == "one pose" else _line((0, 0), (2, 0))
+    pose = None if case == "no pose" else (0.0, 0.0)
+    age = POSE_TIMEOUT + 0.1 if case == "stale pose" else 0.0
+    assert _rate(path, pose=pose, pose_age=age) == (F, 0.0)
+
+
+def test_ring_candidates_cover_every_direction_on_each_ring():
+    cands = ring_candidates(GOAL, None, max_radius=0.2, step=0.1, directions=4)
+    assert len(cands) == 8
+    first_ring = {(round(c.x - GOAL.x, 6), round(c.y - GOAL.y, 6)) for c in cands[:4]}
+    assert first_ring == {(0.1, 0.0), (0.0, 0.1), (-0.1, 0.0), (0.0, -0.1)}  # no robot: starts at +x
+
+
+def _plans(*codes: int) -> list[NavResult]:
+    return [NavResult(ActionStatus.SUCCEEDED, NavErrorCode.NONE, "", _line((0, 0), (1, 1))) if c == 0
+            else NavResult(ActionStatus.ABORTED, NavErrorCode(c), "no") for c in codes]
+
+
+async def _search(plans: list[NavResult], **attrs):
+    ctx = fake_context()
+    ctx.backup.pose(-2.0, 0.0)
+    ctx.navigation.plan_results = plans
+    extra = "".join(f' {k}="{v}"' for k, v in attrs.items())
+    tree, _ = build(f'<FindAlternativeGoal goal="{{goal}}"{extra}/>', ctx, register=(register_autonomy_nodes,),
+                    bb_init={"goal": GOAL})
+    status = await tree.tick_while_running_async()
+    asked = [call[1][0] for call in ctx.navigation.calls if call[0] == "compute_path_to_pose"]
+    return status, tree.root_blackboard, asked
+
+
+async def test_the_first_reachable_candidate_wins_and_is_written_with_its_path():
+    occupied = NavErrorCode.GOAL_OCCUPIED
+    status, bb, asked = await _search(_plans(occupied, occupied, 0), step="0.5", max_radius="1.0")
+    assert status is S and len(asked) == 3 and bb.get("alternatives_tried") == 3
+    assert bb.get("nav_goal") == asked[2] and len(bb.get("path")) == 2
+    assert asked[0].distance_to(GOAL) == pytest.approx(0.5) and asked[0].x < GOAL.x  # nearest, robot side first
+
+
+async def test_no_reachable_candidate_fails_after_trying_them_all():
+    status, bb, asked = await _search(_plans(*[NavErrorCode.NO_VALID_PATH] * 8), step="0.5", max_radius="1.0",
+                                      directions="4")
+    assert status is F and len(asked) == 8 and bb.get("alternatives_tried") == 8
+    assert math.isclose(max(p.distance_to(GOAL) for p in asked), 1.0)
+
+
+async def test_a_planner_that_is_down_stops_the_search():
+    status, bb, asked = await _search(_plans(NavErrorCode.PLANNER_UNKNOWN, 0))
+    assert status is F and len(asked) == 1 and bb.get("alternatives_tried") == 1
