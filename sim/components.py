@@ -55,6 +55,7 @@ class Component:
         self.state = ACTIVE
         self.crash_count = 0
         self.restart_count = 0
+        self.announce = False  # log the next message published (the first after a restart)
         self._restart_task: asyncio.Task | None = None
         self.clear_faults()
 
@@ -91,6 +92,12 @@ class Component:
     def on_activate(self) -> None:
         """Hook: the component (re)starts publishing."""
 
+    def announce_publishing(self) -> None:
+        """After a (re)start, the first message published goes in the component log."""
+        if self.announce:
+            self.announce = False
+            self.sim.log_component(self.name, "published")
+
     def crash(self, reason: str = "crash") -> None:
         """Stop the process now (a restart under way is abandoned)."""
         if self._restart_task is not None and not self._restart_task.done():
@@ -122,6 +129,7 @@ class Component:
             self._set_state(INACTIVE, "restart failed")
             return False
         self.clear_faults()
+        self.announce = True
         self._set_state(ACTIVE, "restarted")
         return True
 
@@ -167,6 +175,8 @@ class Driver(Component):
         self.last_message = msg
         self.published += 1
         self._publish(self.topic, msg)
+        if self.announce:
+            self.announce_publishing()
 
     def skip(self, now: float) -> None:
         """A period passed without publishing (down, silent or stale): reset accumulators."""

@@ -55,6 +55,7 @@ class SimDriver:
         if max_angular_speed is not None:
             robot_params = robot_params.model_copy(update={"max_angular_vel": max_angular_speed})
         self.navigation = NavStack(self.sim.bus, grid, robot=robot_params, params=nav_params)
+        self.navigation.on_component_event = self.sim.log_component
         if cruise_speed is not None:
             self.navigation.set_desired_speed(cruise_speed)
         self._nav_names = {info.name for info in self.navigation.component_infos()}

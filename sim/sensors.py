@@ -239,6 +239,7 @@ class BumperDriver(Driver):
         self.last_message = msg
         self.published += 1
         self._publish(self.topic, msg)
+        self.announce_publishing()
 
     def sample(self, now: float) -> Contact:
         c = self.current

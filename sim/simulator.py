@@ -38,6 +38,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from bt_runtime.runtime.messages import ComponentInfo, ComponentState, Pose2D, Twist
 
 from .bus import Bus
+from .component_log import ComponentLogEntry
 from .components import ACTIVE, Component
 from .faults import FaultInjector
 from .geometry import RayCaster, wrap_angle
@@ -105,6 +106,7 @@ class Simulator:
         self.dt = 1.0 / options.physics_hz
         self.bus = Bus()
         self.events: list[SimEvent] = []
+        self.component_log: list[ComponentLogEntry] = []
 
         if options.spawn is None:
             sp = self.world.spawn.to_pose()
@@ -444,8 +446,21 @@ class Simulator:
         """Restart a component; True once it runs again, False if the restart failed."""
         return await self.component(name).restart()
 
+    def log_component(self, name: str, event: str, detail: str = "") -> None:
+        """An entry in the simulator's component log (``sim.component_log``)."""
+        self.component_log.append(ComponentLogEntry(self.now, name, event, detail))
+
     def on_component_changed(self, comp: Component, old: ComponentState, reason: str) -> None:
         """A component reports a state change: recorded, logged and published."""
+        new = comp.state
+        if new is ComponentState.STARTING:
+            self.log_component(comp.name, "restarting")
+        elif new is ComponentState.ACTIVE:
+            self.log_component(comp.name, "running")
+        elif old is ComponentState.STARTING:
+            self.log_component(comp.name, "restart_failed", reason)
+        else:
+            self.log_component(comp.name, "crashed", reason)
         self.record_event("component_state", component=comp.name, old=old.value, new=comp.state.value,
                            reason=reason)
         log.info("component_state", sim_time=round(self.now, 4), component=comp.name,

@@ -98,6 +98,7 @@ class NavComponent:
         self.failing = False
         self.generation = 0  # bumps on crash and restart: in-flight work is lost
         self.seq = 0
+        self.announce = False  # log the next heartbeat (the first after a restart)
         self._waiters: list[asyncio.Future] = []
 
     @property
@@ -227,6 +228,8 @@ class NavStack:
                                         c.stateful_goal_checker, c.path_length_tolerance)
         self.progress_checker = ProgressChecker(c.required_movement_radius, c.movement_time_allowance)
         self.components: dict[str, NavComponent] = {n: NavComponent(n) for n in COMPONENTS}
+        # called with (component, event) for the simulator's component log (see SimDriver)
+        self.on_component_event: Callable[[str, str], None] | None = None
         # latest inputs
         self._pose: Pose2D | None = None
         self._pose_time = -math.inf
@@ -293,6 +296,9 @@ class NavStack:
                 if comp.alive:
                     comp.seq += 1
                     self.bus.publish(f"heartbeat/{comp.name}", Heartbeat(now, comp.name, comp.seq))
+                    if comp.announce:
+                        comp.announce = False
+                        self._log_component(comp.name, "published")
             t += period
             await asyncio.sleep(max(t - loop.time(), 0.0))
 
@@ -384,6 +390,11 @@ class NavStack:
                               extra={"hung": c.hung, "failing": c.failing})
                 for n, c in self.components.items()]
 
+    def _log_component(self, name: str, event: str) -> None:
+        """Tell the simulator's component log (``on_component_event``, set by the driver)."""
+        if self.on_component_event is not None:
+            self.on_component_event(name, event)
+
     def crash(self, name: str) -> None:
         """The process dies: state INACTIVE, heartbeats stop, running actions abort."""
         comp = self._comp(name)
@@ -394,6 +405,7 @@ class NavStack:
         if task is not None:
             task.cancel()
         comp.changed()
+        self._log_component(name, "crashed")
         log.warning("nav_component_crashed", component=name)
 
     def hang(self, name: str) -> None:
@@ -401,12 +413,14 @@ class NavStack:
         comp = self._comp(name)
         comp.hung = True
         comp.changed()
+        self._log_component(name, "hung")
         log.warning("nav_component_hung", component=name)
 
     def fail_until_restart(self, name: str) -> None:
         """Every request fails (planner: NO_VALID_PATH, controller: NO_VALID_CONTROL,
         behaviours: BEHAVIOR_UNKNOWN) until the component is restarted."""
         self._comp(name).failing = True
+        self._log_component(name, "failing")
         log.warning("nav_component_failing", component=name)
 
     async def restart(self, name: str, delay: float | None = None) -> bool:
@@ -418,12 +432,15 @@ class NavStack:
         comp.state = ComponentState.STARTING
         comp.hung = comp.failing = False
         comp.changed()
+        self._log_component(name, "restarting")
         log.info("nav_component_restarting", component=name, delay=delay)
         await asyncio.sleep(max(delay, 0.0))
         if comp.generation != gen:
             return False
         comp.state = ComponentState.ACTIVE
+        comp.announce = True  # its first heartbeat goes in the component log
         comp.changed()
+        self._log_component(name, "running")
         log.info("nav_component_active", component=name)
         return True
 

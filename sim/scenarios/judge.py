@@ -12,8 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_runtime.runtime.supervisor import Health
-
+from ..component_log import first_fault, restarts
 from .record import RunRecord
 from .spec import (
     AlternativeReached,
@@ -44,19 +43,25 @@ def _after(traj: np.ndarray, t0: float, t1: float | None = None) -> np.ndarray:
 
 
 def component_reset(rec: RunRecord, c: ComponentReset) -> Verdict:
-    events = [e for e in rec.supervisor_events if e.component == c.component]
-    restarts = [i for i, e in enumerate(events) if e.state is Health.RESTARTING]
-    recovered = [e for i, e in enumerate(events)
-                 if e.state is Health.OK and any(r < i for r in restarts) and events[i - 1].state is Health.RESTARTING]
-    final = rec.final_health.get(c.component, "unknown")
-    failed = [e for e in events if e.state in (Health.FAILED, Health.DEAD)]
+    """From the simulator's own component log: the process was restarted, ran again and
+    published again (a message on its topic, or a heartbeat), and runs at the end. What the
+    layer's supervisor believes does not count."""
     name = f"component_reset({c.component})"
-    if recovered and final == "ok":
-        t_fail = f"failed at {failed[0].t:.2f} s, " if failed else ""
-        return Verdict(name, True, f"{t_fail}restarted, OK at {recovered[-1].t:.2f} s")
-    if not restarts:
-        return Verdict(name, False, f"never restarted (health at the end: {final})")
-    return Verdict(name, False, f"restart attempted {len(restarts)}x but health at the end is {final}")
+    entries = rec.component_log
+    fault = first_fault(entries, c.component)
+    attempts = restarts(entries, c.component)
+    done = [(began, published) for began, published in attempts if published is not None]
+    final = rec.component_states.get(c.component, "unknown")
+    what = f"{fault.event} at {fault.t:.2f} s, " if fault is not None else ""
+    if done and final == "active":
+        began, published = done[-1]
+        return Verdict(name, True, f"{what}restarted at {began:.2f} s, publishing again at {published:.2f} s")
+    if not attempts:
+        return Verdict(name, False, f"{what}never restarted (state at the end: {final})")
+    if not done:
+        return Verdict(name, False, f"{what}restart attempted {len(attempts)}x, never published again "
+                                    f"(state at the end: {final})")
+    return Verdict(name, False, f"{what}restarted {len(attempts)}x but the state at the end is {final}")
 
 
 def _reached(rec: RunRecord, index: int, tolerance: float) -> tuple[bool, float, float | None]:

@@ -99,3 +99,4 @@ class RunRecord:
     wall_time: float = 0.0
     start: Pose2D | None = None
     map_grid: Any = None
+    component_log: list[Any] = field(default_factory=list)  # the simulator's (sim.component_log)

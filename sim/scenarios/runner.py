@@ -205,7 +205,7 @@ class ScenarioRun:
             sim_events=list(sim.events), obstacles=dict(getattr(sim, "dynamic_obstacles", {}) or {}),
             gate_switches=list(rt.gate.switches), tick_errors=stats.errors if stats else 0,
             tick_cost_mean_us=(stats.cost_mean * 1e6) if stats else 0.0, wall_time=wall, start=self.start,
-            map_grid=driver.map)
+            map_grid=driver.map, component_log=list(sim.component_log))
 
 
 def run_scenario(spec: ScenarioSpec | str, mode: str, seed: int = 0, *, keep_record: bool = True) -> RunResult:
