@@ -34,6 +34,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--only", action="append", default=[], metavar="NAME",
                    help="run only these scenarios (repeatable, or comma separated)")
     p.add_argument("--mode", choices=["both", "with", "without"], default="both")
+    p.add_argument("--record", type=Path, default=None, metavar="DIR",
+                   help="a rosbag2 bag (MCAP) per run in DIR, named SCENARIO_MODE_seedSEED")
+    p.add_argument("--record-failures", action="store_true", help="with --record: keep only failed runs' bags")
     _add_campaign_flags(p)
     p.set_defaults(func=run)
     return p
@@ -79,7 +82,10 @@ def _artifacts(args: argparse.Namespace) -> dict[str, dict]:
 
 def _run_options(args: argparse.Namespace) -> dict:
     """Extra keyword arguments for every run_scenario call."""
-    return {}
+    options: dict = {}
+    if args.record is not None:
+        options.update(record_dir=str(args.record.resolve()), record_failures=args.record_failures)
+    return options
 
 
 def run(args: argparse.Namespace) -> int:
@@ -97,6 +103,8 @@ def run(args: argparse.Namespace) -> int:
         return _usage("--runs must be at least 1")
     if args.ray_address is not None and args.backend != "ray":
         return _usage("--ray-address needs --backend ray")
+    if args.record_failures and args.record is None:
+        return _usage("--record-failures needs --record DIR")
     runs = None if args.paper_runs else (args.runs or 20)
     modes = ("with", "without") if args.mode == "both" else (args.mode,)
     log = None

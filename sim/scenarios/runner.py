@@ -69,7 +69,7 @@ def _register(factory) -> None:
 class ScenarioRun:
     """The state of one run (on the running loop)."""
 
-    def __init__(self, spec: ScenarioSpec, mode: str, seed: int):
+    def __init__(self, spec: ScenarioSpec, mode: str, seed: int, *, bag: Path | None = None):
         if mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
         self.spec = spec
@@ -82,6 +82,7 @@ class ScenarioRun:
                             s.y + self.rng.uniform(-j.start_xy, j.start_xy),
                             s.yaw + self.rng.uniform(-j.start_yaw, j.start_yaw))
         self.goals: list[GoalRecord] = []
+        self.bag = bag  # record the run to this rosbag2 folder (scenarios --record)
 
     def _fault_jitter(self) -> float:
         j = self.spec.jitter.fault_time
@@ -134,6 +135,11 @@ class ScenarioRun:
         bb = rt.tree.root_blackboard
         if self.mode == "with":
             bb.set("goal_status", "IDLE")
+        recording = None
+        if self.bag is not None:
+            from .bags import start_bag
+
+            recording = start_bag(rt, driver, self.bag, scenario=spec.name, mode=self.mode, seed=self.seed)
         t0 = loop.time()
         await rt.start(tick=(self.mode == "with"))
         for f in spec.faults:
@@ -147,6 +153,8 @@ class ScenarioRun:
         finally:
             record = self._collect(rt, driver, loop.time() - t0, time.perf_counter() - wall0)
             await rt.stop()
+            if recording is not None:
+                recording.stop()
         return record
 
     async def _send_goals(self, rt: AutonomyRuntime, driver: SimDriver, loop, t0: float, deadline: float) -> None:
@@ -208,14 +216,21 @@ class ScenarioRun:
             map_grid=driver.map, component_log=list(sim.component_log))
 
 
-def run_scenario(spec: ScenarioSpec | str, mode: str, seed: int = 0, *, keep_record: bool = True) -> RunResult:
-    """Run one scenario once on a fresh virtual-time loop and judge it."""
+def run_scenario(spec: ScenarioSpec | str, mode: str, seed: int = 0, *, keep_record: bool = True,
+                 record_dir: str | None = None, record_failures: bool = False) -> RunResult:
+    """Run one scenario once on a fresh virtual-time loop and judge it; with ``record_dir``, record
+    it as a rosbag2 bag there (kept only if it failed, with ``record_failures``)."""
     if isinstance(spec, str):
         spec = load_scenario(spec)
     wall0 = time.perf_counter()
-    run = ScenarioRun(spec, mode, seed)
+    from .bags import bag_path, discard
+
+    bag = bag_path(record_dir, spec.name, mode, seed) if record_dir else None
+    run = ScenarioRun(spec, mode, seed, bag=bag)
     record = run_loop(run.execute(), virtual=True)
     verdicts = judge(spec, record)
+    if bag is not None and record_failures and all(v.passed for v in verdicts):
+        discard(bag)
     return RunResult(spec.name, mode, seed, all(v.passed for v in verdicts), verdicts, record.duration,
                      time.perf_counter() - wall0, record if keep_record else None)
 
