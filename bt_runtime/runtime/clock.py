@@ -87,8 +87,20 @@ def is_virtual(loop: asyncio.AbstractEventLoop | None = None) -> bool:
     return isinstance(loop, VirtualTimeLoop)
 
 
+def new_realtime_loop() -> asyncio.AbstractEventLoop:
+    """A real-time loop whose timers fire within microseconds of their deadline.
+
+    The default selector (epoll) rounds every timeout up to a whole millisecond, so a 100 Hz
+    task wakes 0-1 ms late unless it spins before each deadline (a third of a core). select()
+    takes microsecond timeouts: the same punctuality at the cost of a plain sleep. Its limit of
+    1 024 file descriptors is far above what the runtime opens."""
+    if hasattr(selectors, "SelectSelector"):
+        return asyncio.SelectorEventLoop(selectors.SelectSelector())
+    return asyncio.new_event_loop()
+
+
 def new_loop(virtual: bool) -> asyncio.AbstractEventLoop:
-    return VirtualTimeLoop() if virtual else asyncio.new_event_loop()
+    return VirtualTimeLoop() if virtual else new_realtime_loop()
 
 
 def run(main: Awaitable[T] | Callable[[], Awaitable[T]], *, virtual: bool = True,
@@ -98,7 +110,7 @@ def run(main: Awaitable[T] | Callable[[], Awaitable[T]], *, virtual: bool = True
     tasks never block the exit."""
     from .shutdown import run_main
 
-    factory: Callable[[], Any] = VirtualTimeLoop if virtual else asyncio.new_event_loop
+    factory: Callable[[], Any] = VirtualTimeLoop if virtual else new_realtime_loop
     return run_main(main, loop_factory=factory, signals=signals, debug=debug)
 
 

@@ -1,8 +1,9 @@
 """The tick task: ticks the tree at 100 Hz on absolute deadlines, and never dies.
 
-Deadlines are ``t0 + k * period`` (no drift). In real-time mode the task sleeps to just
-before each deadline and then yields until it is reached (``clock.sleep_until(precise=True)``),
-which brings wake-up lateness from ~1.2 ms (stock asyncio) to microseconds. A tick that raises
+Deadlines are ``t0 + k * period`` (no drift). In real time the task sleeps to each deadline
+on a loop with microsecond timers (``clock.new_realtime_loop``); with ``pacing: precise`` it
+sleeps to just before the deadline and then yields until it is reached, for the lowest
+lateness at the cost of a busy core share. A tick that raises
 is logged with the node's path; the tree is halted, the gate stops the robot, and ticking
 resumes on the next period. Lateness and tick cost are recorded for ``bench/loop.py`` and the
 run summary.
@@ -113,7 +114,8 @@ class TickLoop:
         on the same grid, skipping deadlines a slow tick has already passed.
         """
         loop = asyncio.get_running_loop()
-        precise = self.realtime if self.realtime is not None else not is_virtual(loop)
+        realtime = self.realtime if self.realtime is not None else not is_virtual(loop)
+        precise = realtime and self.config.pacing == "precise"
         self.tree.set_clock(loop.time)
         self.done = loop.create_future()
         period = self.period
