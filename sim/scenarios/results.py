@@ -106,9 +106,11 @@ class ResultsLog:
         self.recorded = Recorded()
         exists = self.path.exists() and self.path.stat().st_size > 0
         if exists and not resume:
-            raise ResultsError(f"{self.path}: already holds results; pass --resume {self.path} to continue "
-                               f"that campaign, or choose another file")
-        if exists:
+            if _holds_runs(self.path):
+                raise ResultsError(f"{self.path}: already holds results; pass --resume {self.path} to continue "
+                                   f"that campaign, or choose another file")
+            self.path.unlink()  # only the header of a campaign that never got to run: start afresh
+        elif exists:
             _trim_cut_off_line(self.path)
             read_results([self.path], self.recorded)
         where = "this campaign"
@@ -146,6 +148,11 @@ class ResultsLog:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _holds_runs(path: Path) -> bool:
+    with open(path, encoding="utf-8", errors="replace") as f:
+        return any('"type":"run"' in line.replace(" ", "") for line in f)
 
 
 def _trim_cut_off_line(path: Path) -> None:

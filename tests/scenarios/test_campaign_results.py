@@ -61,6 +61,9 @@ def test_an_existing_campaign_is_not_overwritten_and_a_changed_scenario_not_resu
     _write(path, [spec_line(run.scenario), _line(run)])
     with pytest.raises(ResultsError, match="pass --resume"):
         ResultsLog(path, [run.scenario], resume=False)
+    header_only = tmp_path / "h.jsonl"  # a campaign that failed before its first run
+    _write(header_only, [spec_line(run.scenario)])
+    ResultsLog(header_only, [run.scenario], resume=False).close()
     changed = run.scenario.model_copy(update={"time_limit": run.scenario.time_limit + 1})
     with pytest.raises(ResultsError, match="scenario Lidar_1 differs"):
         ResultsLog(path, [changed], resume=True)
