@@ -16,9 +16,9 @@ from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActio
 from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.messages import Contact, Imu, Pose2D, wrap_angle
 
-from .contact import CONTACT_ARC, ContactArc, marks_of, segments_arc
+from .contact import ContactArc, marks_of, segments_arc
 from .robot import robot_pose
-from .types import POSE
+from .types import CONTACT_ARC, POSE
 
 SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
 

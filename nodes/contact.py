@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from bt_runtime.ports import PortType
 from bt_runtime.runtime.messages import wrap_angle
 
 
@@ -44,17 +43,6 @@ class ContactArc:
 
     def to_string(self) -> str:
         return f"{self.x:g};{self.y:g};{self.bearing:g};{self.half_width:g};{self.radius:g}"
-
-
-def _arc_from_string(text: str) -> ContactArc:
-    parts = [float(p) for p in text.replace(",", ";").split(";") if p.strip()]
-    if len(parts) != 5:
-        raise ValueError(f"a contact arc is 'x;y;bearing;half_width;radius', got {text!r}")
-    return ContactArc(*parts)
-
-
-CONTACT_ARC = PortType("bt_runtime::ContactArc", "custom", ContactArc, from_string=_arc_from_string,
-                       to_string=lambda a: a.to_string() if isinstance(a, ContactArc) else str(a))
 
 
 def segments_arc(spans: tuple[tuple[float, float], ...], pressed: tuple[int, ...]) -> tuple[float, float] | None:

@@ -30,6 +30,8 @@ from bt_runtime.errors import BTRuntimeError
 from bt_runtime.ports import INT, MILLISECONDS, STRING, PortType, vector_of
 from bt_runtime.runtime.messages import Path, Pose2D, yaw_from_quaternion
 
+from .contact import ContactArc
+
 _NUMBER = re.compile(r"\s*[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?\s*$")
 
 
@@ -201,3 +203,15 @@ DURATION = PortType("builtin_interfaces::msg::Duration", "custom", float)
 TRACKING_FEEDBACK = PortType("nav2_msgs::msg::TrackingFeedback", "custom", TrackingFeedback)
 _WS_CPP = "nav2_msgs::msg::WaypointStatus"
 WAYPOINT_STATUSES = PortType(f"std::vector<{_WS_CPP}, std::allocator<{_WS_CPP}> >", "custom", list)
+
+
+def parse_contact_arc(text: str) -> ContactArc:
+    """A contact arc literal: ``x;y;bearing;half_width;radius`` (``nodes.contact.ContactArc``)."""
+    parts = [float(p) for p in text.replace(",", ";").split(";") if p.strip()]
+    if len(parts) != 5:
+        raise ValueError(f"a contact arc is 'x;y;bearing;half_width;radius', got {text!r}")
+    return ContactArc(*parts)
+
+
+CONTACT_ARC = PortType("bt_runtime::ContactArc", "custom", ContactArc, from_string=parse_contact_arc,
+                       to_string=lambda a: a.to_string() if isinstance(a, ContactArc) else str(a))
