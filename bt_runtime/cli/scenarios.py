@@ -6,6 +6,7 @@ autonomy layer, many seeded runs in parallel, and a Table IV-style summary.
   --backend ray   every run a Ray task (a local Ray, or a cluster with --ray-address)
   --results FILE  stream every finished run to FILE (JSON lines); --resume FILE continues it
   --shard K/N     only the K-th of N deterministic slices (combine with `scenarios merge`)
+  --file PATH     your own scenario file (or a folder of them), validated like the shipped ones
 
   scenarios merge FILES...   the table from several results files (shards, resumed parts)
 """
@@ -37,6 +38,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--record", type=Path, default=None, metavar="DIR",
                    help="a rosbag2 bag (MCAP) per run in DIR, named SCENARIO_MODE_seedSEED")
     p.add_argument("--record-failures", action="store_true", help="with --record: keep only failed runs' bags")
+    p.add_argument("--file", action="append", default=[], type=Path, metavar="PATH",
+                   help="run your own scenario file, or every *.yaml in a folder (repeatable); "
+                        "with --only, the named shipped scenarios run too")
     _add_campaign_flags(p)
     p.set_defaults(func=run)
     return p
@@ -66,10 +70,13 @@ def _add_campaign_flags(p: argparse.ArgumentParser) -> None:
 
 def _scenario_specs(args: argparse.Namespace) -> list:
     """The scenarios to run, validated (a bad one raises ScenarioError naming file and field)."""
-    from sim.scenarios.spec import load_scenario, scenario_names
+    from sim.scenarios.spec import load_scenario, load_scenario_files, scenario_names
 
-    names = [n for item in args.only for n in item.split(",") if n] or scenario_names()
-    return [load_scenario(name) for name in names]
+    files = getattr(args, "file", None) or []
+    named = [n for item in args.only for n in item.split(",") if n]
+    if not named and not files:
+        named = scenario_names()
+    return [load_scenario(name) for name in named] + load_scenario_files(files)
 
 
 def _artifacts(args: argparse.Namespace) -> dict[str, dict]:

@@ -59,9 +59,10 @@ class CampaignResult:
             spec = self.specs[name]
             scenarios[name] = {
                 "table": spec.table, "requirements": spec.requirements, "description": spec.description,
-                "paper": {"runs": spec.paper.runs, "without": spec.paper.without, "with": spec.paper.with_,
-                          "real_world_without": spec.paper.real_world_without,
-                          "real_world_with": spec.paper.real_world_with},
+                "paper": None if spec.paper is None else {
+                    "runs": spec.paper.runs, "without": spec.paper.without, "with": spec.paper.with_,
+                    "real_world_without": spec.paper.real_world_without,
+                    "real_world_with": spec.paper.real_world_with},
                 **{mode: {"runs": len(runs), "success_rate": self.success_rate(name, mode),
                           "failure_reasons": failure_reasons(runs), "results": runs}
                    for mode, runs in modes.items()},
@@ -141,8 +142,10 @@ def format_table(result: CampaignResult) -> str:
         n = max(len(modes["with"]), len(modes["without"]))
         without = result.success_rate(name, "without")
         with_ = result.success_rate(name, "with")
-        lines.append(f"{name:<15}{n:>5}{_pct(without):>11}{_pct(with_):>9}   "
-                     f"{spec.paper.runs:>11}{spec.paper.without:>9.0f}{spec.paper.with_:>6.0f}")
+        paper = spec.paper
+        theirs = (f"{paper.runs:>11}{paper.without:>9.0f}{paper.with_:>6.0f}" if paper is not None
+                  else f"{'-':>11}{'-':>9}{'-':>6}")  # a user's scenario: not in the paper
+        lines.append(f"{name:<15}{n:>5}{_pct(without):>11}{_pct(with_):>9}   {theirs}")
     return "\n".join(lines)
 
 

@@ -10,8 +10,9 @@ import time
 class Progress:
     """A one-line progress bar on a terminal (a line every 10 % otherwise)."""
 
-    def __init__(self, total: int, stream=sys.stderr, *, cpus: int | None = None, clock=time.perf_counter):
+    def __init__(self, total: int, stream=None, *, cpus: int | None = None, clock=time.perf_counter):
         self.total = total
+        stream = sys.stderr if stream is None else stream  # the current stderr, not the one at import
         self.stream = stream
         self.cpus = cpus
         self.done = 0

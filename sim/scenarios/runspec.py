@@ -20,6 +20,8 @@ from .artifacts import make_artifact
 from .runner import MODES, run_scenario, scenario_seed
 from .spec import ScenarioSpec
 
+DEFAULT_RUNS = 20  # --paper-runs for a scenario the paper does not have
+
 
 @dataclass(frozen=True)
 class RunSpec:
@@ -57,7 +59,7 @@ def plan_runs(specs: Sequence[ScenarioSpec], runs: int | None, seed: int, modes:
         raise ValueError(f"two scenarios share the name(s) {', '.join(dup)}: results would mix")
     out = []
     for spec in specs:
-        n = spec.paper.runs if runs is None else runs
+        n = runs if runs is not None else spec.paper.runs if spec.paper is not None else DEFAULT_RUNS
         for mode in modes:
             for i in range(n):
                 out.append(RunSpec(spec, mode, i, scenario_seed(seed, i), dict(artifacts or {}), dict(options or {})))

@@ -147,9 +147,9 @@ class PaperResult(_Model):
 
 class ScenarioSpec(_Model):
     name: str
-    table: Literal["II", "III"]
-    requirements: list[str]
-    description: str
+    table: Literal["II", "III"] | None = None  # the paper's table (None: a user's own scenario)
+    requirements: list[str] = Field(default_factory=list)
+    description: str = ""
     world: str = "apartment"
     robot: str = "rosbot2"
     robot_overrides: dict[str, Any] = Field(default_factory=dict,
@@ -164,7 +164,7 @@ class ScenarioSpec(_Model):
     time_limit: float = Field(60.0, gt=0)
     settle: float = Field(1.0, ge=0, description="s to keep running after the last goal finished")
     jitter: Jitter = Field(default_factory=Jitter)
-    paper: PaperResult
+    paper: PaperResult | None = None  # the paper's result (None: a user's own scenario)
 
     @model_validator(mode="after")
     def _goal_indices(self) -> ScenarioSpec:
@@ -198,6 +198,41 @@ def load_scenario(name_or_path: str | Path) -> ScenarioSpec:
     except ValidationError as exc:
         first = exc.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
+        raise ScenarioError(f"{path}: {where}: {first['msg']}") from None
+
+
+def load_scenario_files(paths: list[str | Path]) -> list[ScenarioSpec]:
+    """User scenario files: each path a YAML file or a folder of them (``*.yaml``/``*.yml``,
+    sorted, not recursive). Validated like the shipped ones; errors name the file and field."""
+    specs = []
+    for item in paths:
+        path = Path(item)
+        if path.is_dir():
+            files = sorted(p for p in path.iterdir() if p.suffix in (".yaml", ".yml") and p.is_file())
+            if not files:
+                raise ScenarioError(f"{path}: no scenario files (*.yaml, *.yml) in this folder")
+        elif path.is_file():
+            files = [path]
+        else:
+            raise ScenarioError(f"{path}: no such file or folder")
+        specs.extend(_load_file(f) for f in files)
+    return specs
+
+
+def _load_file(path: Path) -> ScenarioSpec:
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"{path}: cannot read: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise ScenarioError(f"{path}: not valid YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{path}: (top level): a scenario is a mapping of fields")
+    try:
+        return ScenarioSpec.model_validate(data)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first["loc"]) or "(top level)"
         raise ScenarioError(f"{path}: {where}: {first['msg']}") from None
 
 
