@@ -1,0 +1,31 @@
+"""A world file is parsed once per process, yet every caller gets a world of its own."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from sim.world import load_world, resolve_world_path
+
+
+def _copy_of_apartment(tmp_path: Path) -> Path:
+    path = tmp_path / "flat.yaml"
+    path.write_text(resolve_world_path("apartment").read_text())
+    return path
+
+
+def test_each_load_is_an_independent_copy(tmp_path: Path) -> None:
+    path = _copy_of_apartment(tmp_path)
+    first, second = load_world(path), load_world(path)
+    assert first == second and first is not second
+    first.obstacles.clear()
+    assert load_world(path).obstacles == second.obstacles != []
+
+
+def test_a_changed_file_is_read_again(tmp_path: Path) -> None:
+    path = _copy_of_apartment(tmp_path)
+    before = load_world(path)
+    path.write_text(path.read_text().replace("\nname: apartment", "\nname: flat", 1))
+    st = path.stat()
+    os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns + 10_000_000))
+    assert (before.name, load_world(path).name) == ("apartment", "flat")
