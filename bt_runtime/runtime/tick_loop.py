@@ -127,6 +127,10 @@ class TickLoop:
                 k += 1
                 deadline = t0 + k * period
                 await sleep_until(deadline, precise=precise, spin_window=spin)
+                # timers due during the pause fire now; the pause answered their wake-up (and
+                # any other), as BT.CPP's Tree::sleep does, so this tick is not doubled
+                self.tree.timers.fire_due()
+                self.tree.wake_up.check_and_clear()
                 now = loop.time()
                 status = self._tick_once(now - deadline)
                 if self.config.stop_on_completion and (status is SUCCESS or status is FAILURE):

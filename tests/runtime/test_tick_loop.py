@@ -117,3 +117,26 @@ async def test_endless_wake_up_reticks_do_not_freeze_the_loop(make_runtime):
     assert rt.tree.retick_cutoffs == ticks and rt.tick_loop.status is NodeStatus.RUNNING
     assert not rt.tick_task.done()
     await rt.stop()
+
+
+async def test_a_wake_up_between_ticks_does_not_tick_twice(make_runtime):
+    """A wake-up emitted between two ticks (a timer firing) is answered by the next scheduled
+    tick alone: the pause consumed it, so that tick does not re-tick the tree at once."""
+    ticks = []
+
+    def register(factory):
+        def stamp(node):
+            ticks.append(node.context.clock())
+            if len(ticks) == 1:
+                node.config.timers.add(0.004, node.emit_wake_up_signal)  # fires mid-period
+            return NodeStatus.SUCCESS
+
+        factory.register_simple_condition("Stamp", stamp)
+
+    rt = make_runtime(tree_xml('<ReactiveSequence><Stamp/><Sleep msec="1000"/></ReactiveSequence>'), register=[register])
+    await rt.start()
+    await asyncio.sleep(0.035)
+    await rt.stop()
+    assert len(ticks) >= 3
+    gaps = [b - a for a, b in zip(ticks, ticks[1:])]
+    assert min(gaps) > 0.009  # one tick per period, never a back-to-back re-tick
