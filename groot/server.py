@@ -11,7 +11,9 @@ request per loop iteration, each with bounded work and a non-blocking send, so a
 vanished client never stalls the tick. Every request type of the protocol is served: FULLTREE,
 STATUS, BLACKBOARD, HOOK_INSERT/REMOVE, BREAKPOINT_UNLOCK, HOOKS_DUMP, REMOVE_ALL_HOOKS,
 DISABLE_ALL_HOOKS, TOGGLE_RECORDING, GET_TRANSITIONS. Malformed requests get BT.CPP's error
-replies. See ``docs/groot.md`` for what differs from BT.CPP and why.
+replies. Hostile clients are bounded: frames over 64 KiB disconnect the peer inside ZMQ (never
+reaching the loop), at most 64 requests queue, a BLACKBOARD request names at most 256
+blackboards and stops with an error reply past its 2 ms budget. See ``docs/groot.md`` for what differs from BT.CPP and why.
 """
 
 from __future__ import annotations
@@ -40,6 +42,12 @@ if TYPE_CHECKING:
 
 DEFAULT_PORT = 1667
 MAX_TRANSITIONS = 1000
+# Limits against hostile or broken clients (the server shares the loop with the tick):
+MAX_MESSAGE_BYTES = 64 * 1024  # ZMQ_MAXMSGSIZE: a bigger frame disconnects the peer in ZMQ's I/O thread
+MAX_QUEUED_MESSAGES = 64  # ZMQ_RCVHWM: requests waiting beyond this are dropped by ZMQ
+MAX_FRAMES = 8  # identity, delimiter, header, payload: anything longer is refused unread
+MAX_BLACKBOARD_NAMES = 256
+REQUEST_BUDGET_S = 0.002  # work one request may do on the loop; more is refused, not finished
 _UUIDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -99,6 +107,8 @@ class GrootServer:
             P.TOGGLE_RECORDING: self._on_toggle_recording, P.GET_TRANSITIONS: self._on_transitions,
         }
         self.requests_served = 0
+        self.requests_refused = 0
+        self.max_request_cost = 0.0  # s of CPU the costliest request took on the loop's thread
 
     # -- lifecycle -------------------------------------------------------------------------------
     @property
@@ -166,6 +176,8 @@ class GrootServer:
             port = self.port or random.randint(20000, 60000)
             router = ctx.socket(zmq.ROUTER)
             router.setsockopt(zmq.LINGER, 0)
+            router.setsockopt(zmq.MAXMSGSIZE, MAX_MESSAGE_BYTES)
+            router.setsockopt(zmq.RCVHWM, MAX_QUEUED_MESSAGES)
             if ":" in self.host:
                 router.setsockopt(zmq.IPV6, 1)
             pub = ctx.socket(zmq.PUB)
@@ -212,7 +224,15 @@ class GrootServer:
                 envelope, body = frames[:1], frames[1:]
             else:
                 envelope, body = frames[:split + 1], frames[split + 1:]
-            reply = self.handle(body)
+            if len(frames) > MAX_FRAMES:
+                self.requests_refused += 1
+                reply = [b"error", b"too many message parts"]
+            else:
+                t0 = time.thread_time()  # CPU, not wall: a preempted process is not the request's cost
+                reply = self.handle(body)
+                cost = time.thread_time() - t0
+                if cost > self.max_request_cost:
+                    self.max_request_cost = cost
             with contextlib.suppress(zmq.ZMQError):
                 send(envelope + reply, flags=zmq.NOBLOCK)
             self.requests_served += 1
@@ -271,12 +291,19 @@ class GrootServer:
         return [self.tracker.buffer()]
 
     def _on_blackboard(self, body: list[bytes]) -> list[bytes]:
-        names = self._payload(body).decode("utf-8", "replace")
+        payload = self._payload(body)
+        if payload.count(b";") > MAX_BLACKBOARD_NAMES:
+            self.requests_refused += 1
+            raise _ErrorReply(f"too many blackboard names (at most {MAX_BLACKBOARD_NAMES})")
+        start = time.thread_time()
         out: dict[str, Any] = {}
-        for name in _split_names(names):
+        for name in dict.fromkeys(_split_names(payload.decode("utf-8", "replace"))):
             record = self._subtrees.get(name)
             if record is not None:
                 out[name] = P.export_blackboard(record.blackboard)
+            if time.thread_time() - start > REQUEST_BUDGET_S:
+                self.requests_refused += 1
+                raise _ErrorReply(f"request over its {REQUEST_BUDGET_S * 1e3:.0f} ms budget: ask for fewer blackboards")
         return [P.msgpack_encode(out or None)]
 
     def _on_hook_insert(self, body: list[bytes]) -> list[bytes]:
