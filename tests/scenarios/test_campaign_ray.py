@@ -56,13 +56,18 @@ def test_ray_backend_reports_the_local_rays_cpus(ray_backend):
 
 
 def test_ray_gives_the_same_runs_as_local(ray_backend):
-    plan = cheap_plan(runs=2) + plan_runs([load_scenario("Lidar_1")], 1, 5, ("with",))
+    report = {"trajectory": {}}  # what --report needs back from every run
+    plan = cheap_plan(runs=2, artifacts=report) + plan_runs([load_scenario("Lidar_1")], 1, 5, ("with",),
+                                                            artifacts=report)
     local = run_campaign(plan, LocalBackend(jobs=1))
     on_ray = run_campaign(plan, ray_backend)
     assert on_ray.backend == "ray"
     assert [r["key"] for r in on_ray.results] == [r.key for r in plan]  # each once, in plan order
     assert by_key(on_ray.results) == by_key(local.results)
     assert any(r["success"] for r in on_ray.results) and not all(r["success"] for r in on_ray.results)
+    assert on_ray.trajectories.keys() == local.trajectories.keys() and len(local.trajectories) == len(plan)
+    for key, drawn in local.trajectories.items():
+        assert (on_ray.trajectories[key]["trajectory"] == drawn["trajectory"]).all()
 
 
 def test_a_dying_worker_is_retried_and_its_run_counted_once(ray_backend, tmp_path):
