@@ -46,7 +46,7 @@ def loop_factories(virtual: bool) -> Mapping[str, Callable[[], asyncio.AbstractE
     return {"virtual_time": VirtualTimeLoop} if virtual else {"asyncio": asyncio.new_event_loop}
 
 
-@pytest.hookimpl(optionalhook=True)
+@pytest.hookimpl(optionalhook=True, trylast=True)
 def pytest_asyncio_loop_factories(config, item):
     """pytest-asyncio asks which loop an async test runs on (a conftest may decide first)."""
     return loop_factories(wants_virtual_time(item))
