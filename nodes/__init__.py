@@ -8,18 +8,19 @@ from __future__ import annotations
 
 from bt_runtime import BehaviorTreeFactory
 
-from . import battery, collision, goals, health, path
+from . import battery, collision, goals, health, motion_safety, path
 from .nav2 import register_nav2_nodes
 
 AUTONOMY_NODES = [
     health.ComponentHealthy, health.ComponentsHealthy, health.AnyComponentDead, health.RequestRestarts,
     health.RestartComponent, health.WaitForHealthy, health.SetSpeedLimit, health.RestoreSpeedLimit,
-    health.EmergencyStop, health.ReleaseEmergencyStop, health.IsSafeToContinue,
+    health.EmergencyStop, health.ReleaseEmergencyStop, health.IsSafeToContinue, health.RestartServerAfterError,
     collision.CollisionDetected, collision.InContact, collision.EstimateContactPoint, collision.ReverseOut,
     collision.StopRobot, collision.ReleaseRobot, collision.MarkObstacle, collision.ClearCostmaps,
     battery.BatteryCanReach, battery.BatteryAbove, battery.RefuseGoal,
-    path.RatePathQuality, path.FindAlternativeGoal,
-    goals.GoalPending, goals.SetGoalStatus,
+    path.RatePathQuality, path.FindAlternativeGoal, path.EscapeInflation,
+    goals.GoalPending, goals.SetGoalStatus, goals.RetryGoal,
+    motion_safety.StopBeforeObstacle,
 ]
 
 

@@ -283,12 +283,17 @@ class MarkObstacle(AsyncActionNode):
 
 
 class ClearCostmaps(AsyncActionNode):
-    """Clear the navigation costmaps (obstacle layers): ``local``, ``global`` or ``both``."""
+    """Clear the navigation costmaps (obstacle layers): ``local``, ``global`` or ``both``.
+    FAILURE (not an exception) when the server that owns a costmap is down or does not answer."""
 
     @classmethod
     def provided_ports(cls):
         return [input_port("which", str, "both")]
 
     async def run(self):
-        await self.context.navigation.clear_costmaps(self.get_input("which"))
+        try:
+            await self.context.navigation.clear_costmaps(self.get_input("which"))
+        except Exception as exc:  # a server that is down fails the node, never the tick
+            self.context.extras["clear_costmaps_error"] = f"{type(exc).__name__}: {exc}"
+            return FAILURE
         return SUCCESS

@@ -7,11 +7,13 @@ restarts run in the background (``RequestRestarts``) or as an async action
 
 from __future__ import annotations
 
+import asyncio
+
 from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActionNode, SyncActionNode
 from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.supervisor import Health
 
-from .types import NAMES
+from .types import ERROR_CODE, NAMES
 
 SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
 
@@ -92,20 +94,52 @@ class RequestRestarts(SyncActionNode):
 
 class RestartComponent(AsyncActionNode):
     """Restart ``component`` and wait until its data flows again: SUCCESS, or FAILURE if the
-    restart failed (after two failures the supervisor declares it dead)."""
+    restart failed (after two failures the supervisor declares it dead). A restart already
+    under way (e.g. asked for by ``RequestRestarts``) is joined, not repeated."""
 
     @classmethod
     def provided_ports(cls):
         return [input_port("component", str)]
 
     async def run(self):
-        return SUCCESS if await self.context.supervisor.restart(self.get_input("component")) else FAILURE
+        return SUCCESS if await restart_and_wait(self.context.supervisor, self.get_input("component")) else FAILURE
+
+
+async def restart_and_wait(sup, name: str) -> bool:
+    """Restart ``name`` through the supervisor's restart policy (joining one under way)."""
+    task = sup.request_restart(name)
+    if task is None:
+        return sup.health(name) is Health.OK
+    return bool(await asyncio.shield(task))
+
+
+class RestartServerAfterError(AsyncActionNode):
+    """Restart the navigation server a Nav2 error code blames, when a restart can cure it (a
+    server that is down, timed out, or fails every request): 100/106/107 -> controller_server,
+    200/207/208 -> planner_server, 700/701 -> behavior_server. SUCCESS when restarted or when
+    the code blames no server; FAILURE if the restart failed."""
+
+    BLAME = {100: "controller_server", 106: "controller_server", 107: "controller_server",
+             200: "planner_server", 207: "planner_server", 208: "planner_server",
+             700: "behavior_server", 701: "behavior_server"}
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("error_code", ERROR_CODE, description="a Nav2 error code, e.g. {nav_error}")]
+
+    async def run(self):
+        code = self.get_input("error_code", 0) or 0
+        server = self.BLAME.get(int(code))
+        if server is None or server not in self.context.supervisor.components:
+            return SUCCESS
+        return SUCCESS if await restart_and_wait(self.context.supervisor, server) else FAILURE
 
 
 class WaitForHealthy(StatefulActionNode):
-    """RUNNING until the listed components are OK; FAILURE after ``timeout`` s or if one is DEAD.
-    A component not heard from yet (UNKNOWN) is not OK: a goal waits for localization and the
-    planner to report instead of failing (and restarting the planner) at start-up."""
+    """RUNNING until the listed components are OK; FAILURE after ``timeout`` s (0: never) or if
+    one is DEAD. A component not heard from yet (UNKNOWN) is not OK: a goal waits for
+    localization and the planner to report instead of failing (and restarting the planner) at
+    start-up."""
 
     @classmethod
     def provided_ports(cls):
@@ -113,7 +147,8 @@ class WaitForHealthy(StatefulActionNode):
                 input_port("timeout", float, 15.0, "seconds")]
 
     def on_start(self):
-        self._deadline = self.context.clock() + self.get_input("timeout")
+        timeout = self.get_input("timeout")
+        self._deadline = self.context.clock() + timeout if timeout > 0 else float("inf")
         return self.on_running()
 
     def on_running(self):

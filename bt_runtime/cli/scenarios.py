@@ -41,6 +41,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--file", action="append", default=[], type=Path, metavar="PATH",
                    help="run your own scenario file, or every *.yaml in a folder (repeatable); "
                         "with --only, the named shipped scenarios run too")
+    p.add_argument("--variants", type=int, default=None, metavar="N",
+                   help="N randomized variants of the failure families instead, with the layer unless --mode "
+                        "says otherwise; --only picks families (docs/scenarios.md)")
     _add_campaign_flags(p)
     p.set_defaults(func=run)
     return p
@@ -116,8 +119,13 @@ def run(args: argparse.Namespace) -> int:
     modes = ("with", "without") if args.mode == "both" else (args.mode,)
     log = None
     try:
-        specs = _scenario_specs(args)
-        plan = plan_runs(specs, runs, args.seed, modes, artifacts=_artifacts(args), options=_run_options(args))
+        if args.variants is not None:
+            from sim.scenarios.variant_runs import variant_campaign
+
+            specs, plan, format_table, format_failures = variant_campaign(args, _artifacts(args), _run_options(args))
+        else:
+            specs = _scenario_specs(args)
+            plan = plan_runs(specs, runs, args.seed, modes, artifacts=_artifacts(args), options=_run_options(args))
         if args.shard is not None:
             plan = shard_runs(plan, *parse_shard(args.shard))
         if args.results is not None or args.resume is not None:

@@ -1,8 +1,8 @@
 """Is this message fresh and plausible? The supervisor's checks beyond "a message arrived".
 
 A driver can keep publishing and still be broken: it republishes its last message (the stamp
-stops advancing), it re-stamps one frozen reading (a scan identical to the previous one, which
-real lidar noise never produces), or its data is invalid (NaN/inf where a number must be, or a
+stops advancing), it re-stamps one frozen reading (a scan or IMU reading identical to the previous
+one, which sensor noise never produces), or its data is invalid (NaN/inf where a number must be, or a
 share of scan ranges that are NaN or outside [range_min, range_max] above a threshold). Each
 check returns None for a good message or a short reason; the supervisor fails a component
 whose data has been bad for longer than its timeout, with that reason.
@@ -23,12 +23,13 @@ from .messages import BatteryState, Imu, LaserScan, LocalizedPose, Odometry
 class DataCheck:
     """Checks the messages of one stream, remembering what it needs from the previous one."""
 
-    __slots__ = ("invalid_share", "_stamp", "_ranges")
+    __slots__ = ("invalid_share", "_stamp", "_ranges", "_imu")
 
     def __init__(self, invalid_share: float = 0.3):
         self.invalid_share = invalid_share
         self._stamp: float | None = None
         self._ranges: np.ndarray | None = None
+        self._imu: tuple[float, float, float] | None = None
 
     def __call__(self, msg: Any) -> str | None:
         stamp = getattr(msg, "stamp", None)
@@ -41,7 +42,14 @@ class DataCheck:
         if kind is LaserScan:
             return self._scan(msg)
         if kind is Imu:
-            return _non_finite(msg.yaw_rate, msg.accel_x, msg.accel_y)
+            reading = (msg.yaw_rate, msg.accel_x, msg.accel_y)
+            problem = _non_finite(*reading)
+            if problem is not None:
+                return problem
+            previous, self._imu = self._imu, reading
+            if reading == previous:  # an IMU's noise never repeats a reading exactly
+                return "stale data: identical readings repeated"
+            return None
         if kind is Odometry:
             p, t = msg.pose, msg.twist
             return _non_finite(p.x, p.y, p.yaw, t.linear, t.angular)

@@ -17,6 +17,7 @@ from bt_runtime.runtime.supervisor import Health
 @pytest.mark.parametrize(("component", "fault", "phrase"), [
     ("lidar", {"kind": "stall", "mode": "stale"}, "stale data: timestamps not advancing"),
     ("lidar", {"kind": "stall", "mode": "frozen"}, "stale data: identical scans repeated"),
+    ("imu", {"kind": "stall", "mode": "frozen"}, "stale data: identical readings repeated"),
     ("lidar", {"kind": "corrupt", "mode": "nan"}, "invalid data"),
     ("lidar", {"kind": "corrupt", "mode": "garbage"}, "out of range"),
     ("imu", {"kind": "corrupt", "mode": "nan"}, "invalid data: non-finite values"),

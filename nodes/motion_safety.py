@@ -1,0 +1,105 @@
+"""Emergency detection in motion (fn_req2): slow down or stop *before* a collision.
+
+``StopBeforeObstacle`` watches the lidar for obstacles in the robot's swept corridor (its
+width plus a margin) in the direction it is commanded to move. When the free distance ahead
+gets shorter than the stopping distance (v^2 / 2a + v * reaction time + margin) it caps the
+forward speed at what still stops in time, down to zero, by overriding the navigation command
+in the decision gate (turning stays allowed, so the controller can steer away; moving away from
+the obstacle is never limited). It only acts on fresh scans, and lets go of the gate as soon
+as the corridor is clear. Free distances are computed once per scan, so a tick costs a few
+comparisons.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bt_runtime import NodeStatus, SyncActionNode
+from bt_runtime.node import NodeConfig
+from bt_runtime.ports import input_port, output_port
+from bt_runtime.runtime.messages import LaserScan
+
+SUCCESS = NodeStatus.SUCCESS
+
+
+def free_distances(scan: LaserScan, half_width: float, radius: float) -> tuple[float, float]:
+    """(ahead, behind): metres from the robot's front/back to the nearest scan point inside the
+    corridor of ``half_width`` on either side of its axis (inf if none)."""
+    r = np.asarray(scan.ranges, dtype=float)
+    angles = scan.angle_min + scan.angle_increment * np.arange(len(r))
+    ok = np.isfinite(r)
+    x = r[ok] * np.cos(angles[ok])
+    y = r[ok] * np.sin(angles[ok])
+    band = np.abs(y) <= half_width
+    fwd = x[band & (x > 0)]
+    back = x[band & (x < 0)]
+    ahead = float(fwd.min()) - radius if len(fwd) else math.inf
+    behind = float(-back.max()) - radius if len(back) else math.inf
+    return max(ahead, 0.0), max(behind, 0.0)
+
+
+class StopBeforeObstacle(SyncActionNode):
+    """Cap the speed towards an obstacle on the scan so the robot stops before it (always
+    SUCCESS; ``free_ahead`` reports the free distance in the direction of motion)."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("deceleration", float, 0.5, "m/s^2 the base can brake with, conservatively"),
+                input_port("reaction", float, 0.2, "s from scan to braking (scan age, tick, gate)"),
+                input_port("margin", float, 0.05, "m kept between the footprint and the obstacle"),
+                input_port("side_margin", float, 0.03, "m added to the robot's half width"),
+                input_port("max_scan_age", float, 0.5, "s; older scans are not trusted"),
+                output_port("free_ahead", float, "{free_ahead}")]
+
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._scan_id = 0
+        self._free = (math.inf, math.inf)
+        self._overriding = False
+        super().__init__(name, config)
+
+    def tick(self):
+        ctx = self.context
+        backup = ctx.backup
+        scan = backup.latest("scan")
+        age = backup.age("scan")
+        if scan is None or age is None or age > self.get_input("max_scan_age"):
+            return self._let_go()
+        if id(scan) != self._scan_id:
+            self._scan_id = id(scan)
+            radius = ctx.robot.radius
+            self._free = free_distances(scan, radius + self.get_input("side_margin"), radius)
+        nav = backup.latest("nav_cmd_vel")
+        if nav is None or ctx.gate.tree_command_active and not self._overriding:
+            return self._let_go()  # someone else in the tree is driving
+        v = nav.linear
+        free = self._free[0] if v >= 0 else self._free[1]
+        allowed = self._allowed_speed(free)
+        self.set_output("free_ahead", float(free))
+        if abs(v) <= allowed:
+            return self._let_go()
+        ctx.gate.set_tree_command(math.copysign(allowed, v), nav.angular)
+        self._overriding = True
+        return SUCCESS
+
+    def _allowed_speed(self, free: float) -> float:
+        """The fastest speed that still stops ``margin`` short of an obstacle ``free`` m away."""
+        room = free - self.get_input("margin")
+        if room <= 0.0:
+            return 0.0
+        a, t = self.get_input("deceleration"), self.get_input("reaction")
+        # v t + v^2 / 2a = room  ->  v = a (-t + sqrt(t^2 + 2 room / a))
+        return a * (-t + math.sqrt(t * t + 2.0 * room / a))
+
+    def _let_go(self):
+        if self._overriding:
+            self._overriding = False
+            self.context.gate.clear_tree_command()
+        return SUCCESS
+
+    def halt(self) -> None:
+        if self._overriding:
+            self._overriding = False
+            self.context.gate.clear_tree_command()
+        super().halt()

@@ -1,0 +1,400 @@
+"""Randomized variants of the paper's failure families, as run specs any campaign backend runs.
+
+The paper's 14 scenarios fix the world, the robot, the poses and the fault times. A layer tuned
+to them can pass them and still fail the same failures a little differently. This module draws
+fair variants per failure family (seeded, reproducible): the world and robot, start and goal
+(taken from a pool of free poses and kept only if the static map has a path between them),
+fault timing (standing or driving), hang versus crash, stale and NaN data, flapping, two faults
+at once, navigation-server crashes and hangs, oblique and corner collisions, goals inside
+obstacles, walls, outside the map or behind walls, and battery goals near the range limit.
+
+Each variant is an ordinary ``ScenarioSpec`` (validated like a shipped file, named
+``V<index>_<family>``) inside a campaign ``RunSpec`` (runspec.py), so the local pool, Ray,
+shards and resumed results files run variants exactly as they run the shipped scenarios.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from .runspec import RunSpec
+from .spec import ScenarioSpec
+
+SENSORS = ("lidar", "imu", "odom", "localization")
+NAV_SERVERS = ("planner_server", "controller_server", "behavior_server")
+WORLDS = ("apartment", "round_obstacles")
+ROBOTS = ("rosbot2", "burger", "waffle")
+SPEED = 0.25  # m/s, the paper's cruise speed
+PAPER = {"runs": 1, "without": 0, "with": 100}
+
+
+# -- poses ---------------------------------------------------------------------------------------
+
+@lru_cache(maxsize=8)
+def _planner(world: str, robot: str):
+    """A planner on the static map a run of (world, robot) starts with (cached per process)."""
+    from ..bus import Bus
+    from ..driver import robot_params_for
+    from ..nav import NavStack, OccupancyGrid
+    from ..simulator import Simulator
+
+    sim = Simulator(world, robot, seed=0)
+    raster = sim.rasterize(0.05, layer="lidar")
+    grid = OccupancyGrid(np.where(raster.data > 0, 100, 0).astype(np.int8), raster.resolution,
+                         (raster.origin[0], raster.origin[1], 0.0))
+    nav = NavStack(Bus(), grid, robot=robot_params_for(sim))
+    return nav.planner, sim.world
+
+
+def path_length(world: str, robot: str, start: tuple[float, float], goal: tuple[float, float]) -> float:
+    """Length (m) of the static-map plan between two points; inf if there is none."""
+    from bt_runtime.runtime.messages import Pose2D
+
+    planner, _ = _planner(world, robot)
+    res = planner.plan(Pose2D(*start), Pose2D(*goal))
+    if not res.ok or res.points is None or len(res.points) < 2:
+        return math.inf
+    return float(np.hypot(*np.diff(res.points[:, :2], axis=0).T).sum())
+
+
+def _pose_pool(world: str) -> list[tuple[float, float, float]]:
+    _, w = _planner(world, "rosbot2")
+    poses = [(w.spawn.x, w.spawn.y, w.spawn.yaw)]
+    poses += [(p.x, p.y, p.yaw) for p in w.goals.values()]
+    return poses
+
+
+def _free_pose(rng: np.random.Generator, world: str, near: tuple[float, float, float], spread: float,
+               clearance: float) -> tuple[float, float, float]:
+    """A pose within ``spread`` of ``near`` at least ``clearance`` from every obstacle."""
+    _, w = _planner(world, "rosbot2")
+    for _ in range(40):
+        x = near[0] + rng.uniform(-spread, spread)
+        y = near[1] + rng.uniform(-spread, spread)
+        if w.bounds.contains(x, y) and w.clearance(x, y) >= clearance:
+            return (float(x), float(y), float(rng.uniform(-math.pi, math.pi)))
+    return near
+
+
+def _trip(rng: np.random.Generator, world: str, robot: str, min_len: float = 1.2,
+          max_len: float = 6.0) -> tuple[tuple[float, float, float], tuple[float, float, float], float]:
+    """A start and a goal with a static-map path of a reasonable length between them."""
+    pool = _pose_pool(world)
+    margin = 0.45 if robot == "waffle" else 0.35
+    for _ in range(200):
+        a = pool[rng.integers(len(pool))]
+        b = pool[rng.integers(len(pool))]
+        start = _free_pose(rng, world, a, 0.4, margin)
+        goal = _free_pose(rng, world, b, 0.4, margin)
+        if math.hypot(goal[0] - start[0], goal[1] - start[1]) < min_len:
+            continue
+        length = path_length(world, robot, start[:2], goal[:2])
+        if min_len <= length <= max_len:
+            return start, goal, length
+    raise RuntimeError(f"no start/goal pair with a {min_len}-{max_len} m path in {world} for {robot}")
+
+
+def _pose(p: tuple[float, float, float]) -> dict[str, float]:
+    return {"x": round(p[0], 3), "y": round(p[1], 3), "yaw": round(p[2], 3)}
+
+
+def _drive_time(length: float) -> float:
+    return length / SPEED * 1.6 + 10.0
+
+
+def _spec(name: str, table: str, description: str, **fields: Any) -> ScenarioSpec:
+    data = {"name": name, "table": table, "requirements": fields.pop("requirements", []),
+            "description": description, "paper": PAPER, "jitter": {"start_xy": 0.0, "start_yaw": 0.0,
+                                                                    "fault_time": 0.0}}
+    data.update(fields)
+    return ScenarioSpec.model_validate(data)
+
+
+def _choice(rng: np.random.Generator, items):
+    return items[int(rng.integers(len(items)))]
+
+
+# -- sensor failures -----------------------------------------------------------------------------
+
+def _sensor_fault(rng: np.random.Generator, component: str) -> tuple[str, list[dict[str, Any]]]:
+    """A way for a sensor driver to fail: crash, hang, stale or NaN data, garbage, flapping,
+    or a first restart that fails."""
+    ways = ["crash", "hang", "stale", "nan", "flapping", "restart_fails"]
+    if component in ("lidar", "imu"):  # noisy sensors: a re-stamped frozen reading shows
+        ways.append("frozen")
+    if component == "lidar":  # plausible-looking garbage is detectable by range checks only in a scan
+        ways.append("garbage")
+    how = _choice(rng, tuple(ways))
+    if how == "crash":
+        return how, [{"kind": "crash", "component": component}]
+    if how == "hang":
+        return how, [{"kind": "stall", "component": component, "duration": 600.0, "mode": "silent"}]
+    if how in ("stale", "frozen"):
+        return how, [{"kind": "stall", "component": component, "duration": 600.0, "mode": how}]
+    if how in ("nan", "garbage"):
+        return how, [{"kind": "corrupt", "component": component, "duration": 600.0, "mode": how}]
+    if how == "flapping":
+        return how, [{"kind": "crash", "component": component}, {"kind": "crash", "component": component,
+                                                                  "_later": float(rng.uniform(4.0, 7.0))}]
+    return how, [{"kind": "restart_policy", "component": component, "fail_next": 1},
+                 {"kind": "crash", "component": component}]
+
+
+def sensor_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
+    world, robot = _choice(rng, WORLDS), _choice(rng, ROBOTS)
+    start, goal, length = _trip(rng, world, robot)
+    driving = bool(rng.integers(2))
+    two = rng.uniform() < 0.25
+    components = list(rng.choice(SENSORS, size=2 if two else 1, replace=False))
+    faults, hows = [], []
+    t_fault = float(rng.uniform(1.0, 3.0)) if not driving else float(rng.uniform(1.0, 5.0))
+    for comp in components:
+        how, steps = _sensor_fault(rng, comp)
+        hows.append(f"{comp} {how}")
+        for step in steps:
+            later = step.pop("_later", 0.0)
+            when = {"after_goal": 0, "delay": t_fault + later} if driving else {"at": 2.0 + t_fault + later}
+            faults.append({"fault": step, **when})
+    goals = [{"at": 1.0, "pose": _pose(goal)}] if driving else []
+    success = [{"kind": "component_reset", "component": c} for c in components]
+    if driving:
+        success.append({"kind": "reach_goal", "goal": 0, "tolerance": 0.25})
+    limit = (_drive_time(length) + 30.0) if driving else 25.0
+    return _spec(f"V{index:04d}_sensor", "III", f"{' + '.join(hows)} while "
+                 f"{'driving' if driving else 'standing'} ({robot} in {world})",
+                 requirements=["fn_req1", "fn_req2", "fn_req5"], world=world, robot=robot,
+                 start=_pose(start), goals=goals, faults=faults, success=success, time_limit=limit,
+                 speeds={"linear": SPEED})
+
+
+# -- navigation servers --------------------------------------------------------------------------
+
+def nav_server_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
+    world, robot = _choice(rng, WORLDS), _choice(rng, ROBOTS)
+    start, goal, length = _trip(rng, world, robot)
+    server = _choice(rng, NAV_SERVERS)
+    kinds = ["nav_crash", "nav_hang"] + (["nav_fail_until_restart"] if server != "behavior_server" else [])
+    kind = _choice(rng, kinds)
+    before = rng.uniform() < 0.25
+    when = {"at": 0.5} if before else {"after_goal": 0, "delay": float(rng.uniform(0.5, 5.0))}
+    faults = [{"fault": {"kind": kind, "component": server}, **when}]
+    if rng.uniform() < 0.2:  # a second server fails too
+        other = _choice(rng, [s for s in NAV_SERVERS if s != server])
+        faults.append({"fault": {"kind": "nav_crash", "component": other}, "after_goal": 0,
+                       "delay": float(rng.uniform(0.5, 6.0))})
+    success = [{"kind": "reach_goal", "goal": 0, "tolerance": 0.25}]
+    return _spec(f"V{index:04d}_nav_server", "II", f"{server} {kind.removeprefix('nav_')} "
+                 f"{'before the goal' if before else 'while driving'} ({robot} in {world})",
+                 requirements=["fn_req1", "fn_req7"], world=world, robot=robot, start=_pose(start),
+                 goals=[{"at": 1.0, "pose": _pose(goal)}], faults=faults, success=success,
+                 time_limit=_drive_time(length) + 30.0, speeds={"linear": SPEED})
+
+
+# -- unreachable goals ---------------------------------------------------------------------------
+
+def _wall_point(rng: np.random.Generator, world: str, near: tuple[float, float]) -> tuple[float, float] | None:
+    """A point inside a wall or obstacle of the world, within 2.5 m of ``near``."""
+    _, w = _planner(world, "rosbot2")
+    for _ in range(300):
+        x = near[0] + rng.uniform(-2.5, 2.5)
+        y = near[1] + rng.uniform(-2.5, 2.5)
+        if w.bounds.contains(x, y) and w.clearance(x, y, lidar=True) <= 0.0:
+            return float(x), float(y)
+    return None
+
+
+def _has_alternative(world: str, robot: str, start, target, within: float = 0.75) -> bool:
+    """Is there a point within ``within`` m of ``target``, clear of obstacles by the robot's
+    radius plus a margin, that the static map lets the robot reach?"""
+    from ..robot import load_profile
+
+    _, w = _planner(world, robot)
+    need = load_profile(robot).radius + 0.1
+    for r in np.arange(0.1, within + 1e-9, 0.1):
+        for a in np.linspace(0, 2 * math.pi, 16, endpoint=False):
+            x, y = target[0] + r * math.cos(a), target[1] + r * math.sin(a)
+            if w.bounds.contains(x, y) and w.clearance(x, y) >= need and \
+                    path_length(world, robot, start[:2], (x, y)) < math.inf:
+                return True
+    return False
+
+
+def unreachable_goal_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
+    world, robot = _choice(rng, WORLDS), _choice(rng, ROBOTS)
+    start, goal, length = _trip(rng, world, robot, max_len=5.0)
+    how = _choice(rng, ("in_obstacle", "in_wall", "outside_map", "phantom"))
+    map_obstacles, faults = [], []
+    criterion: dict[str, Any] = {"kind": "alternative_reached", "goal": 0, "within": 1.0}
+    target = goal
+    if how == "in_obstacle":
+        radius = float(rng.uniform(0.15, 0.4))
+        map_obstacles.append({"kind": "obstacle_at", "x": goal[0], "y": goal[1], "radius": radius,
+                              "name": "at_goal"})
+    elif how == "in_wall":
+        point = _wall_point(rng, world, goal[:2])
+        if point is None:
+            how = "in_obstacle"
+            map_obstacles.append({"kind": "obstacle_at", "x": goal[0], "y": goal[1], "radius": 0.3,
+                                  "name": "at_goal"})
+        else:
+            target = (point[0], point[1], goal[2])
+    elif how == "outside_map":
+        _, w = _planner(world, "rosbot2")
+        b = w.bounds
+        side = int(rng.integers(4))
+        out = float(rng.uniform(1.2, 3.0))  # beyond the alternative-goal radius: only refusing is right
+        x = float(np.clip(goal[0], b.xmin + 0.5, b.xmax - 0.5))
+        y = float(np.clip(goal[1], b.ymin + 0.5, b.ymax - 0.5))
+        x, y = ((b.xmin - out, y), (b.xmax + out, y), (x, b.ymin - out), (x, b.ymax + out))[side]
+        target = (x, y, goal[2])
+        criterion = {"kind": "goal_refused", "goal": 0, "max_travel": 0.3}
+    else:  # a phantom obstacle on the goal in the costmaps (no sensor supports it): clear, re-plan
+        faults.append({"fault": {"kind": "nav_phantom_obstacle", "x": goal[0], "y": goal[1], "radius": 0.3},
+                       "at": 0.5})
+        criterion = {"kind": "reach_goal", "goal": 0, "tolerance": 0.25}
+    if criterion["kind"] == "alternative_reached" and not _has_alternative(world, robot, start, target):
+        how += " (no safe point near it: refuse)"
+        criterion = {"kind": "goal_refused", "goal": 0, "max_travel": 0.3}
+    return _spec(f"V{index:04d}_unreachable_goal", "II", f"goal {how.replace('_', ' ')} ({robot} in {world})",
+                 requirements=["fn_req7", "fn_req8"], world=world, robot=robot, start=_pose(start),
+                 map_obstacles=map_obstacles, goals=[{"at": 1.0, "pose": _pose(target)}], faults=faults,
+                 success=[criterion], time_limit=_drive_time(length) + 30.0, speeds={"linear": SPEED})
+
+
+# -- collisions ----------------------------------------------------------------------------------
+
+def collision_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
+    world, robot = _choice(rng, WORLDS), _choice(rng, ROBOTS)
+    start, goal, length = _trip(rng, world, robot, min_len=2.5)
+    how = _choice(rng, ("on_path", "oblique", "corner", "pushed"))
+    faults: list[dict[str, Any]] = []
+    success: list[dict[str, Any]] = [{"kind": "out_of_contact", "for_last": 2.0},
+                                     {"kind": "reach_goal", "goal": 0, "tolerance": 0.25}]
+    if how == "pushed":
+        faults.append({"fault": {"kind": "invisible_obstacle", "ahead": 0.0, "width": 0.3, "depth": 0.3,
+                                 "name": "hitter"}, "at": 2.0})
+        faults.append({"fault": {"kind": "push", "impulse": float(rng.uniform(0.5, 1.2)),
+                                 "direction": 3.1416}, "at": 2.0})
+        goals = [{"at": 6.0, "pose": _pose(goal)}]
+    else:
+        planner, _ = _planner(world, robot)
+        from bt_runtime.runtime.messages import Pose2D
+
+        res = planner.plan(Pose2D(*start[:2]), Pose2D(*goal[:2]))
+        pts = res.points
+        along = float(rng.uniform(0.35, 0.6))
+        i = int(along * (len(pts) - 1))
+        x, y, heading = float(pts[i, 0]), float(pts[i, 1]), float(pts[min(i + 3, len(pts) - 1), 2])
+        yaw = heading + (float(rng.uniform(0.4, 1.0)) * (1 if rng.integers(2) else -1) if how != "on_path" else 0.0)
+        lateral = float(rng.uniform(0.1, 0.18)) * (1 if rng.integers(2) else -1) if how == "corner" else 0.0
+        x -= lateral * math.sin(heading)
+        y += lateral * math.cos(heading)
+        faults.append({"fault": {"kind": "invisible_obstacle", "x": round(x, 3), "y": round(y, 3),
+                                 "yaw": round(yaw, 3), "width": 0.3, "depth": 0.3, "name": "low_box"}, "at": 0.0})
+        success.insert(1, {"kind": "obstacle_in_map", "obstacle": "low_box", "within": 0.3})
+        goals = [{"at": 1.0, "pose": _pose(goal)}]
+    return _spec(f"V{index:04d}_collision", "II", f"{how.replace('_', ' ')} collision ({robot} in {world})",
+                 requirements=["fn_req2", "fn_req6"], world=world, robot=robot, start=_pose(start),
+                 goals=goals, faults=faults, success=success, time_limit=_drive_time(length) + 45.0,
+                 speeds={"linear": SPEED})
+
+
+# -- battery -------------------------------------------------------------------------------------
+
+def _required_percent(world: str, robot: str, start, goal, capacity_ah: float) -> float:
+    """What the layer's battery check asks for (nominal model, reserve 10 %, factor 1.5)."""
+    from bt_runtime.runtime.messages import Pose2D, RobotInfo
+    from nodes.battery import energy_for_path, path_turning
+
+    from ..robot import load_profile
+
+    planner, _ = _planner(world, robot)
+    res = planner.plan(Pose2D(*start[:2]), Pose2D(*goal[:2]))
+    if not res.ok or res.points is None or len(res.points) < 2:
+        return math.inf
+    profile = load_profile(robot)
+    b = profile.battery
+    info = RobotInfo(radius=profile.radius, max_linear=profile.max_linear, max_angular=profile.max_angular,
+                     capacity_ah=capacity_ah, voltage_nominal=(b.voltage_full + b.voltage_empty) / 2,
+                     idle_power_w=b.idle_power_w, k_linear=b.k_linear, k_angular=b.k_angular)
+    pts = res.points
+    length = float(np.hypot(*np.diff(pts[:, :2], axis=0).T).sum())
+    energy = energy_for_path(length, path_turning(pts, start[2]), min(info.max_linear, SPEED),
+                             min(info.max_angular, 1.0), info)
+    return info.percent_for(energy) * 1.5 + 10.0
+
+
+def battery_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
+    """A far goal just beyond the battery's range (with its reserve), then a near one within it:
+    the state of charge lies between what the two need, at least 25 % of the gap from each."""
+    world = "apartment"
+    robot = _choice(rng, ROBOTS)
+    capacity = 0.1
+    for _ in range(100):
+        start, far, far_len = _trip(rng, world, robot, min_len=3.0, max_len=9.0)
+        near = _free_pose(rng, world, start, 1.2, 0.4)
+        near_len = path_length(world, robot, start[:2], near[:2])
+        if not 0.4 <= near_len <= 2.0:
+            continue
+        need_far = _required_percent(world, robot, start, far, capacity)
+        need_near = _required_percent(world, robot, start, near, capacity)
+        gap = need_far - need_near
+        if gap > 2.0 and need_far < 95.0:
+            soc = float(rng.uniform(need_near + 0.25 * gap, need_far - 0.25 * gap))
+            break
+    else:
+        raise RuntimeError("no battery variant found")
+    return _spec(f"V{index:04d}_battery", "II", f"battery at {soc:.1f} %: far goal {far_len:.1f} m (needs "
+                 f"{need_far:.1f} %) refused, near goal {near_len:.1f} m (needs {need_near:.1f} %) reached "
+                 f"({robot})", requirements=["fn_req9"], world=world,
+                 robot=robot, robot_overrides={"battery.capacity_ah": capacity, "battery.initial_soc": round(soc, 2)},
+                 start=_pose(start),
+                 goals=[{"at": 1.0, "pose": _pose(far)},
+                        {"after_previous": True, "delay": 1.0, "pose": _pose(near)}],
+                 success=[{"kind": "goal_refused", "goal": 0},
+                          {"kind": "reach_goal", "goal": 1, "tolerance": 0.25}],
+                 time_limit=_drive_time(near_len) + 30.0, speeds={"linear": SPEED})
+
+
+FAMILIES: dict[str, Callable[[np.random.Generator, int], ScenarioSpec]] = {
+    "sensor": sensor_variant,
+    "nav_server": nav_server_variant,
+    "unreachable_goal": unreachable_goal_variant,
+    "collision": collision_variant,
+    "battery": battery_variant,
+}
+WEIGHTS = {"sensor": 0.35, "nav_server": 0.2, "unreachable_goal": 0.15, "collision": 0.2, "battery": 0.1}
+
+
+def generate(n: int, seed: int = 0, *, families: list[str] | None = None, modes: tuple[str, ...] = ("with",),
+             artifacts: dict | None = None, options: dict | None = None) -> list[RunSpec]:
+    """``n`` variants (each in every mode), families drawn by weight; reproducible from ``seed``:
+    variant ``i`` depends only on (seed, i), so shards and resumed campaigns agree."""
+    names = families or list(FAMILIES)
+    unknown = [f for f in names if f not in FAMILIES]
+    if unknown:
+        raise ValueError(f"unknown variant families {unknown}; known: {', '.join(FAMILIES)}")
+    weights = np.array([WEIGHTS[f] for f in names])
+    weights /= weights.sum()
+    out = []
+    for i in range(n):
+        rng = np.random.default_rng([seed, i])
+        family = names[int(rng.choice(len(names), p=weights))]
+        spec = FAMILIES[family](rng, i)
+        run_seed = int(rng.integers(2**31))
+        out.extend(RunSpec(spec, mode, i, run_seed, artifacts=dict(artifacts or {}), options=dict(options or {}))
+                   for mode in modes)
+    return out
+
+
+def family_of(name: str) -> str:
+    """The family of a variant from its name (``V0012_nav_server`` -> ``nav_server``)."""
+    return name.split("_", 1)[1] if name.startswith("V") and "_" in name else name
+
+
+__all__ = ["FAMILIES", "family_of", "generate", "path_length"]
