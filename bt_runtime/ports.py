@@ -192,6 +192,13 @@ class PortType:
             return [self.element.from_string(part, enums) for part in split_list(text)]
         if self._from_string is not None:
             return self._from_string(text)
+        from_json = getattr(self.py_type, "from_json", None)
+        if text.startswith("json:") and from_json is not None:  # BT.CPP's generic convertFromJSON
+            try:
+                data = json.loads(text[5:])
+            except ValueError as exc:
+                raise BTRuntimeError(f"Can't parse JSON [{text[5:]}]: {exc}") from None
+            return from_json(data)
         raise LogicError("You didn't implement the template specialization of convertFromString "
                          f"for this type: {self.name}")
 

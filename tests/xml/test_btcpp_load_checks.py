@@ -147,3 +147,31 @@ def test_subtree_model_port_names_are_checked(factory, name):
     with pytest.raises(BTRuntimeError, match="Invalid port name") as info:
         factory.create_tree_from_text(text)
     assert info.value.element == "input_port"
+
+
+class Vector3:
+    def __init__(self, x: float, y: float, z: float):
+        self.x, self.y, self.z = x, y, z
+
+    @classmethod
+    def from_json(cls, data: dict) -> Vector3:
+        return cls(data["x"], data["y"], data["z"])
+
+
+class UsesVector(SyncActionNode):
+    @staticmethod
+    def provided_ports():
+        return [input_port("v", Vector3)]
+
+    def tick(self):
+        v = self.get_input("v")
+        return NodeStatus.SUCCESS if (v.x, v.y, v.z) == (2.1, 4.2, 6.3) else NodeStatus.FAILURE
+
+
+def test_json_literal_of_a_type_with_from_json(factory):
+    """BT.CPP's generic converter reads ``json:{...}`` through the type's JSON conversion."""
+    factory.register_node_type(UsesVector)
+    tree = factory.create_tree_from_text(doc("""<UsesVector v='json:{"x":2.1, "y":4.2, "z":6.3}'/>"""))
+    assert tree.tick_once() is NodeStatus.SUCCESS
+    with pytest.raises(LogicError, match="can not be converted to Vector3"):
+        factory.create_tree_from_text(doc('<UsesVector v="2.1;4.2;6.3"/>'))
