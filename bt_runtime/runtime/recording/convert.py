@@ -57,8 +57,8 @@ Output = list[tuple[str, str, Any]]
 
 
 def stamp(t: float) -> Any:
-    sec = math.floor(t)
-    return Time(sec=int(sec), nanosec=min(int(round((t - sec) * 1e9)), 999_999_999))
+    sec, ns = divmod(int(round(t * 1e9)), 1_000_000_000)
+    return Time(sec, ns)
 
 
 def quat(yaw: float) -> Any:
@@ -69,8 +69,10 @@ def pose(x: float, y: float, yaw: float) -> Any:
     return Pose(position=Point(x=float(x), y=float(y), z=0.0), orientation=quat(yaw))
 
 
-def transform(t: float, parent: str, child: str, x: float, y: float, yaw: float) -> Any:
-    return TransformStamped(header=Header(stamp=stamp(t), frame_id=parent), child_frame_id=child,
+def transform(t: float | Any, parent: str, child: str, x: float, y: float, yaw: float) -> Any:
+    """``t``: seconds, or a Time already made for the same instant."""
+    when = stamp(t) if isinstance(t, float | int) else t
+    return TransformStamped(header=Header(stamp=when, frame_id=parent), child_frame_id=child,
                             transform=Transform(translation=Vector3(x=float(x), y=float(y), z=0.0),
                                                 rotation=quat(yaw)))
 
@@ -104,10 +106,11 @@ def odom(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
     p = m.pose
     s.odom_pose = (p.x, p.y, p.yaw)
-    msg = Odometry(header=Header(stamp=stamp(m.stamp), frame_id=f.odom), child_frame_id=f.base,
+    when = stamp(m.stamp)
+    msg = Odometry(header=Header(stamp=when, frame_id=f.odom), child_frame_id=f.base,
                    pose=PoseWithCovariance(pose=pose(p.x, p.y, p.yaw), covariance=COV36),
                    twist=TwistWithCovariance(twist=twist(m.twist.linear, m.twist.angular), covariance=COV36))
-    tf = TFMessage(transforms=[transform(m.stamp, f.odom, f.base, p.x, p.y, p.yaw)])
+    tf = TFMessage(transforms=[transform(when, f.odom, f.base, p.x, p.y, p.yaw)])
     return [(topic, "nav_msgs/msg/Odometry", msg), (s.tf_topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
@@ -189,9 +192,13 @@ def command(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 
 def tree_log(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     """m: [(t, uid, node_name, previous, current)] of one tick, as Nav2's RosTopicLogger sends."""
-    events = [BehaviorTreeStatusChange(timestamp=stamp(et), node_name=name, uid=uid & 0xFFFF,
-                                       previous_status=prev, current_status=cur)
-              for et, uid, name, prev, cur in m]
+    stamps: dict[float, Any] = {}
+    events = []
+    for et, uid, name, prev, cur in m:
+        when = stamps.get(et)
+        if when is None:
+            when = stamps[et] = stamp(et)
+        events.append(BehaviorTreeStatusChange(when, name, uid & 0xFFFF, prev, cur))
     return [(topic, "nav2_msgs/msg/BehaviorTreeLog", BehaviorTreeLog(timestamp=stamp(t), event_log=events))]
 
 
