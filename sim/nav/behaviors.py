@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from bt_runtime.runtime.messages import NavErrorCode, Pose2D, Twist
+from bt_runtime.runtime.messages import NavErrorCode, Pose2D, Twist, wrap_angle
 
 from .costmap import LocalCostmap
 from .params import BehaviorParams
@@ -87,8 +87,7 @@ class Spin(Behavior):
         if self.timed_out(now):
             return BehaviorStatus(True, E.BEHAVIOR_TIMEOUT,
                                   "Exceeded time allowance before reaching the Spin goal")
-        delta = pose.yaw - self.prev_yaw
-        delta = (delta + math.pi) % (2 * math.pi) - math.pi
+        delta = wrap_angle(pose.yaw - self.prev_yaw)
         self.relative_yaw += delta
         self.prev_yaw = pose.yaw
         remaining = abs(self.cmd_yaw) - abs(self.relative_yaw)
