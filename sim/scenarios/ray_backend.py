@@ -49,7 +49,9 @@ class RayBackend:
             kwargs["runtime_env"] = runtime_env()
         if address is None:
             kwargs.update(num_cpus=num_cpus or os.cpu_count() or 1, _node_ip_address="127.0.0.1")
-        ray.init(address=address, **kwargs)
+        self._owner = not ray.is_initialized()  # else: this process already runs Ray (a notebook, a test)
+        if self._owner:
+            ray.init(address=address, **kwargs)
         self.cpus = int(ray.cluster_resources().get("CPU", 0)) or 1
         self._task = ray.remote(execute_run).options(num_cpus=1, max_retries=MAX_RETRIES)
 
@@ -70,7 +72,9 @@ class RayBackend:
                     yield _lost(spec, exc), {}
 
     def close(self) -> None:
-        self._ray.shutdown()
+        """Disconnect (and stop a local Ray this backend started); a Ray someone else started stays."""
+        if self._owner:
+            self._ray.shutdown()
 
 
 def _lost(spec: RunSpec, exc: Exception) -> dict[str, Any]:

@@ -4,6 +4,7 @@ local Ray leaves no process behind."""
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from pathlib import Path
@@ -77,3 +78,16 @@ def test_a_dying_worker_is_retried_and_its_run_counted_once(ray_backend, tmp_pat
     assert [r["key"] for r in result.results] == [r.key for r in plan]
     assert all(r["artifacts"] == {maker: "survived a retry"} for r in result.results)
     assert len(list(tmp_path.iterdir())) == len(plan)  # every run's first worker died
+
+
+def test_the_cli_runs_a_campaign_on_ray_and_streams_its_results(ray_backend, tmp_path, capsys):
+    from bt_runtime.__main__ import main
+
+    results, out = tmp_path / "runs.jsonl", tmp_path / "campaign.json"
+    args = ["scenarios", "--backend", "ray", "--only", "Lidar_1", "--mode", "without", "--runs", "2", "--seed", "5"]
+    assert main([*args, "--results", str(results), "--json", str(out)]) == 0
+    assert "on 2 CPUs" in capsys.readouterr().err  # the progress line names the cluster's CPUs
+    keys = [json.loads(line)["key"] for line in results.read_text().splitlines() if '"type":"run"' in line]
+    assert sorted(keys) == ["Lidar_1/without/0", "Lidar_1/without/1"]
+    meta = json.loads(out.read_text())["meta"]
+    assert (meta["backend"], meta["jobs"], meta["runs"]) == ("ray", 2, 2)
