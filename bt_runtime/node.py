@@ -365,10 +365,13 @@ class TreeNode:
         if self._pre_hook or self._post_hook or self._monitor:
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
             self._cell.fast = type(self)._execute_tick_full
-        elif cfg._pre or cfg._post:
-            fast = _conditions_tick(type(self).tick, cfg)
+        elif (cfg._pre or cfg._post) and (after := _after_full_tick(type(self))) is not False:
+            fast = _conditions_tick(type(self).tick, cfg, after)
             self.execute_tick = fast.__get__(self)  # type: ignore[method-assign]
             self._cell.fast = fast
+        elif cfg._pre or cfg._post:  # a class with its own _execute_tick_full
+            self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
+            self._cell.fast = type(self)._execute_tick_full
         else:
             self.__dict__.pop("execute_tick", None)
             execute_tick = type(self).execute_tick
@@ -1027,7 +1030,7 @@ def tick_cell(cell: NodeCell) -> NodeStatus:
 def _is_execute_tick(fast: Callable[[TreeNode], NodeStatus], node: TreeNode) -> bool:
     """Is ``fast`` the node's execute_tick (which wraps tick()'s errors itself)?"""
     cls = type(node)
-    return fast is cls.execute_tick or fast is cls._execute_tick_full
+    return fast is cls.execute_tick or fast is cls._execute_tick_full or getattr(fast, "wraps_tick_errors", False)
 
 
 def _wrap_error(cell: NodeCell, exc: Exception) -> NodeExecutionError:
@@ -1058,9 +1061,38 @@ def manifest_for(cls: type[TreeNode], registration_id: str, ports: Any = None,
                             metadata=list(cls.metadata()), builtin=builtin)
 
 
-def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig) -> Callable[[TreeNode], NodeStatus]:
+def _after_sync_tick(node: TreeNode, status: NodeStatus) -> None:
+    if status is RUNNING:
+        raise LogicError("SyncActionNode MUST never return RUNNING")
+
+
+def _after_decorator_tick(node: TreeNode, status: NodeStatus) -> None:
+    cell = node._child_cell
+    if cell is not None:
+        cs = cell.status
+        if cs is SUCCESS or cs is FAILURE:
+            cell.status = IDLE
+
+
+def _after_full_tick(cls: type) -> Callable[[TreeNode, NodeStatus], None] | None | bool:
+    """What the class's ``_execute_tick_full`` does after TreeNode's (None: nothing), or False
+    when the class has an override of its own that a specialised closure cannot reproduce."""
+    full = cls._execute_tick_full
+    if full is TreeNode._execute_tick_full:
+        return None
+    if full is SyncActionNode._execute_tick_full:
+        return _after_sync_tick
+    if full is DecoratorNode._execute_tick_full:
+        return _after_decorator_tick
+    return False
+
+
+def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig,
+                     after: Callable[[TreeNode, NodeStatus], None] | None) -> Callable[[TreeNode], NodeStatus]:
     """``_execute_tick_full`` for a node with pre/post-conditions and no hooks, specialised to
-    the scripts it has: no dictionary look-ups and no absent scripts on the tick path.
+    the scripts it has: no dictionary look-ups and no absent scripts on the tick path. ``after``
+    is the library subclass's own step (SyncActionNode's RUNNING check, DecoratorNode's child
+    reset).
 
     The scripts are taken from the config now; code that changes a node's conditions later
     calls ``refresh_conditions()``, as it must for the fast paths too."""
@@ -1104,6 +1136,9 @@ def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig) ->
             if status is IDLE:
                 node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
             cell.status = status
+        if after is not None:
+            after(node, status)
         return status
 
+    execute.wraps_tick_errors = True  # type: ignore[attr-defined]  # see _is_execute_tick
     return execute

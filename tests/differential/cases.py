@@ -515,6 +515,18 @@ case("post_not_run_on_halt",
 case("on_halted_on_reactive_halt",
      tree('<ReactiveSequence><C name="c"/><R name="r" _onHalted="h := h + 1"/></ReactiveSequence>'),
      setup={"h": 0}, scripts={"c": [S, F, S, F]}, keys={"h": "int"}, ticks=4)
+case("post_on_decorator_resets_its_completed_child",
+     tree('<Sequence><Inverter _post="p := p + 1"><A name="a"/></Inverter>'
+          '<Repeat num_cycles="2" _onSuccess="s := s + 1"><A name="b"/></Repeat></Sequence>'),
+     setup={"p": 0, "s": 0}, scripts={"a": [F, F, S, F]}, keys={"p": "int", "s": "int"}, ticks=4)
+case("post_on_decorator_restarts_a_stateful_child",
+     tree('<Inverter _post="p := p + 1"><R name="r"/></Inverter>'),
+     setup={"p": 0}, scripts={"r": [R_, S, R_, S]}, keys={"p": "int"}, ticks=4)
+case("pre_on_decorator_with_running_child",
+     tree('<Sequence><ForceSuccess _while="ok" _post="p := p + 1"><R name="r"/></ForceSuccess></Sequence>'),
+     setup={"ok": 1, "p": 0}, between={2: {"ok": 0}}, scripts={"r": [R_, R_, R_, S]}, keys={"p": "int"}, ticks=4)
+case("post_script_error_at_tick",
+     tree('<Sequence><A name="a" _post="p := missing + 1"/></Sequence>'), ticks=1, error="tick")
 case("pre_skip_if_on_control_node",
      tree('<Sequence><Fallback _skipIf="1"><A name="a"/></Fallback><A name="b"/></Sequence>'), ticks=1)
 case("pre_condition_script_error_at_tick",
