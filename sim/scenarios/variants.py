@@ -197,13 +197,16 @@ def nav_server_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
 
 # -- unreachable goals ---------------------------------------------------------------------------
 
-def _wall_point(rng: np.random.Generator, world: str, near: tuple[float, float]) -> tuple[float, float] | None:
-    """A point inside a wall or obstacle of the world, within 2.5 m of ``near``."""
+def _wall_point(rng: np.random.Generator, world: str, near: tuple[float, float],
+                start: tuple[float, float]) -> tuple[float, float] | None:
+    """A point inside a wall or obstacle of the world, within 2.5 m of ``near`` and at least
+    1.5 m from ``start`` (so reaching an alternative means driving towards it)."""
     _, w = _planner(world, "rosbot2")
     for _ in range(300):
         x = near[0] + rng.uniform(-2.5, 2.5)
         y = near[1] + rng.uniform(-2.5, 2.5)
-        if w.bounds.contains(x, y) and w.clearance(x, y, lidar=True) <= 0.0:
+        if w.bounds.contains(x, y) and w.clearance(x, y, lidar=True) <= 0.0 and \
+                math.hypot(x - start[0], y - start[1]) >= 1.5:
             return float(x), float(y)
     return None
 
@@ -236,7 +239,7 @@ def unreachable_goal_variant(rng: np.random.Generator, index: int) -> ScenarioSp
         map_obstacles.append({"kind": "obstacle_at", "x": goal[0], "y": goal[1], "radius": radius,
                               "name": "at_goal"})
     elif how == "in_wall":
-        point = _wall_point(rng, world, goal[:2])
+        point = _wall_point(rng, world, goal[:2], start[:2])
         if point is None:
             how = "in_obstacle"
             map_obstacles.append({"kind": "obstacle_at", "x": goal[0], "y": goal[1], "radius": 0.3,
