@@ -618,6 +618,11 @@ def input_port(name: str, type: Any = None, default: Any = _NO_DEFAULT,  # noqa:
 
 def output_port(name: str, type: Any = None, default: Any = _NO_DEFAULT,  # noqa: A002
                 description: str = "") -> PortInfo:
+    """An output port; its default, if any, must name a blackboard entry (``"{key}"``)."""
+    if default is not _NO_DEFAULT and not (isinstance(default, str) and len(default) >= 2
+                                           and default[0] == "{" and default[-1] == "}"):
+        raise LogicError("Output port can only refer to blackboard entries, i.e. use the syntax "
+                         f"'{{port_name}}' (port '{name}', default {default!r})")
     return _make_port(PortDirection.OUTPUT, name, type, default, description)
 
 

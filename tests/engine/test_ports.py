@@ -273,3 +273,13 @@ def test_scripting_enums_in_enum_ports(factory):
     assert read(factory, 'c="VERDE"')["c"] is Color.GREEN
     with pytest.raises(XMLLoadError, match="can not be converted to int"):
         factory.create_tree_from_text(doc('<Read i="VERDE"/>'))  # only enum-typed ports use the table
+
+
+@pytest.mark.parametrize("default", ["5", "", 5, "{x"])
+def test_output_port_default_must_name_an_entry(default):
+    """BT.CPP's OutputPort(name, default, description) refuses a default that is not {key}."""
+    from bt_runtime import LogicError, output_port
+
+    with pytest.raises(LogicError, match="Output port can only refer to blackboard entries"):
+        output_port("out", int, default=default)
+    assert output_port("out", int, default="{x}").default == "{x}"
