@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from bt_runtime.runtime.driver import STREAMS
 from bt_runtime.runtime.messages import ComponentInfo, ComponentState, RobotInfo
 
 from .nav import NavParams, NavStack, OccupancyGrid, RobotParams
@@ -34,6 +35,9 @@ def robot_params_for(sim: Simulator) -> RobotParams:
                        max_linear_accel=profile.max_linear_accel,
                        max_angular_accel=min(profile.max_angular_accel, 3.2),
                        laser_offset=(lidar.x, lidar.y, 0.0))
+
+
+ROBOT_STREAMS = frozenset({*STREAMS, "plan", "component_state"})
 
 
 class SimDriver:
@@ -73,6 +77,12 @@ class SimDriver:
         await self.sim.stop()
 
     def subscribe(self, stream: str, callback: Callable[[Any], None]) -> Callable[[], None]:
+        """A robot stream (what a real robot's topics carry). The simulator's own topics (the
+        ground truth, its event log) are refused: they are for judging and recording, never
+        for deciding; those subscribe on ``driver.sim``."""
+        if stream not in ROBOT_STREAMS and not stream.startswith("heartbeat/"):
+            raise ValueError(f"{stream!r} is not a robot stream (streams: {', '.join(sorted(ROBOT_STREAMS))}, "
+                             "heartbeat/<component>); the simulator's truth is not on the driver interface")
         return self.sim.subscribe(stream, callback)
 
     def send_velocity(self, linear: float, angular: float) -> None:

@@ -28,9 +28,11 @@ def recording_hooks(driver: SimDriver, *, ground_truth: str = GROUND_TRUTH, faul
         return costmap.base_version, snapshot
 
     lidar = driver.sim.profile.lidar
+    truth = driver.sim.subscribe
     return RecordingHooks(
-        streams=[StreamSpec("ground_truth", ground_truth, "odometry"),
-                 StreamSpec("sim_event", faults, "event", select=lambda e: e.kind == "fault"),
-                 StreamSpec("sim_event", events, "event", select=lambda e: e.kind != "fault")],
+        # the simulator's own topics: not on the driver interface (the robot never gets the truth)
+        streams=[StreamSpec("ground_truth", ground_truth, "odometry", source=truth),
+                 StreamSpec("sim_event", faults, "event", select=lambda e: e.kind == "fault", source=truth),
+                 StreamSpec("sim_event", events, "event", select=lambda e: e.kind != "fault", source=truth)],
         map_source=map_source,
         laser_offset=(lidar.x, lidar.y, 0.0))

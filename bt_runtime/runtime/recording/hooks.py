@@ -25,13 +25,16 @@ class StreamSpec:
 
     ``kind``: 'odometry' (anything with ``stamp``, ``pose`` Pose2D and ``twist``; written as
     nav_msgs/msg/Odometry in the map frame) or 'event' (anything with ``t``, ``kind``, ``data``;
-    written as rcl_interfaces/msg/Log). ``select`` filters messages (None: all).
+    written as rcl_interfaces/msg/Log). ``select`` filters messages (None: all). ``source``
+    subscribes to streams that are not the robot's (the simulator's ground truth and events,
+    which the driver interface does not carry); None: the driver.
     """
 
     stream: str
     topic: str
     kind: str
     select: Callable[[Any], bool] | None = None
+    source: Callable[[str, Callable[[Any], None]], Callable[[], None]] | None = None
 
 
 @dataclass

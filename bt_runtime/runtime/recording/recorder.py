@@ -66,7 +66,7 @@ class Recorder:
         if nav_topic:
             self._subscribe("nav_cmd_vel", "command", nav_topic)
         for spec in self.hooks.streams:
-            self._subscribe(spec.stream, spec.kind, spec.topic, spec.select)
+            self._subscribe(spec.stream, spec.kind, spec.topic, spec.select, spec.source)
         gate = rt.gate
         self._previous_on_output = gate.on_output
         self._switches_seen = len(gate.switches)
@@ -83,7 +83,8 @@ class Recorder:
         self._task = asyncio.get_running_loop().create_task(self._periodic(), name="recording")
         self.attached = True
 
-    def _subscribe(self, stream: str, kind: str, topic: str, select: Callable[[Any], bool] | None = None) -> None:
+    def _subscribe(self, stream: str, kind: str, topic: str, select: Callable[[Any], bool] | None = None,
+                   source: Callable[[str, Callable[[Any], None]], Callable[[], None]] | None = None) -> None:
         put, clock = self.pipeline.put, self.clock
         if select is None:
             def callback(msg: Any) -> None:
@@ -93,7 +94,8 @@ class Recorder:
                 if select(msg):
                     put(kind, topic, clock(), msg)
         try:
-            self._unsubscribe.append(self.runtime.driver.subscribe(stream, callback))
+            subscribe = source if source is not None else self.runtime.driver.subscribe
+            self._unsubscribe.append(subscribe(stream, callback))
         except (KeyError, ValueError) as exc:  # a driver without this stream (e.g. no plan topic)
             log.info("recording_stream_unavailable", stream=stream, error=str(exc))
 
