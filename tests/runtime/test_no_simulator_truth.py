@@ -20,9 +20,11 @@ from bt_runtime.runtime.messages import Contact, RobotInfo
 from sim.driver import ROBOT_STREAMS, SimDriver
 from tests.paths import ROOT
 
-# the CLI wires the simulator in at the edge (DESIGN.md section 2): everything else stays out
+# the CLI and the pytest plugin wire the simulator in at the edge (DESIGN.md section 2):
+# everything else stays out
+EDGES = ("cli", "testing")
 LAYER = [p for d in ("nodes", "bt_runtime") for p in sorted((ROOT / d).rglob("*.py"))
-         if "cli" not in p.relative_to(ROOT).parts]
+         if not set(EDGES) & set(p.relative_to(ROOT).parts)]
 TRUTH_ATTRIBUTES = {"sim", "physics", "ground_truth", "component_log", "true_ranges", "dynamic_obstacles"}
 TRUTH_TOPICS = {"ground_truth", "sim_event"}
 
@@ -52,7 +54,7 @@ def _violations(path) -> list[str]:
 def test_the_layer_scan_finds_its_files():
     names = {p.relative_to(ROOT).as_posix() for p in LAYER}
     assert {"nodes/collision.py", "nodes/battery.py", "bt_runtime/runtime/supervisor.py"} <= names
-    assert not any(n.startswith("bt_runtime/cli/") for n in names)
+    assert not any(n.startswith(("bt_runtime/cli/", "bt_runtime/testing/")) for n in names)
 
 
 def test_no_node_or_runtime_module_reaches_into_the_simulator():
