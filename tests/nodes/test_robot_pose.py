@@ -7,13 +7,11 @@ from types import SimpleNamespace
 
 import pytest
 
-from bt_runtime.factory import BehaviorTreeFactory
 from bt_runtime.runtime.messages import RobotInfo
 from bt_runtime.status import NodeStatus
 from nodes import register_autonomy_nodes
 from nodes.robot import POSE_TIMEOUT, robot_pose
-from tests.helpers import tree_xml
-from tests.nodes.nav2.support import fake_context
+from tests.nodes.nav2.support import build, fake_context
 
 
 def _node(ctx):
@@ -45,10 +43,7 @@ def test_contact_point_is_not_estimated_from_a_stale_pose(stale):
     ctx.backup.pose(2.0, 0.0, 0.0)
     if stale:
         ctx.clock.advance(POSE_TIMEOUT + 0.5)
-    factory = BehaviorTreeFactory(context=ctx)
-    register_autonomy_nodes(factory)
-    tree = factory.create_tree_from_text(tree_xml('<EstimateContactPoint direction="0" offset="0.1"/>'))
-    tree.set_clock(ctx.clock)
+    tree, _ = build('<EstimateContactPoint direction="0" offset="0.1"/>', ctx, register=(register_autonomy_nodes,))
     status = tree.tick_once()
     if stale:
         assert status is NodeStatus.FAILURE
