@@ -17,3 +17,14 @@ def test_a_dying_pool_worker_is_retried_and_every_run_counted_once(tmp_path):
     assert len(list(tmp_path.iterdir())) == len(plan)  # every run's first worker died
     inline = run_campaign(cheap_plan(runs=1), LocalBackend(jobs=1))
     assert by_key(result.results) == by_key(inline.results)
+
+
+def test_a_run_that_raises_is_counted_once_as_failed_with_the_reason():
+    plan = cheap_plan(runs=1, options={"no_such_option": 1})  # run_scenario raises TypeError at once
+    result = run_campaign(plan, LocalBackend(jobs=1))
+    assert [r["key"] for r in result.results] == [r.key for r in plan]
+    for r in result.results:
+        assert not r["success"]
+        [verdict] = r["verdicts"]
+        assert verdict["criterion"] == "run_completed"
+        assert "TypeError" in verdict["reason"] and "no_such_option" in verdict["reason"]
