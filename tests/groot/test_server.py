@@ -534,15 +534,16 @@ async def test_btview_headless_commands(tmp_path) -> None:
     async with serving(tree) as (server, _):
         ticker = Ticker(tree, period=0.01).start()
         flipper = asyncio.get_running_loop().create_task(flip_guard(leaves, ticker))
-        conn = ["--port", str(server.port), "--timeout", "2"]
+        # five clients start at once on a loaded machine: a request may wait seconds for its answer
+        conn = ["--port", str(server.port), "--timeout", "15"]
         btview = [sys.executable, "-m", "btview"]
         rec = tmp_path / "session.btv.jsonl"
         results = await asyncio.gather(
             run_proc(*btview, "snapshot", *conn, "--uid", "--no-color", "--ascii", "--no-legend"),
             run_proc(*btview, "info", *conn, "--samples", "5", "--no-color"),
             run_proc(*btview, "blackboard", *conn, "--json", "Main", "sub"),
-            run_proc(*btview, "echo", *conn, "--json", "--duration", "1.0", "--exit-on-error"),
-            run_proc(*btview, "record", *conn, "--duration", "1.0", "-o", str(rec)))
+            run_proc(*btview, "echo", *conn, "--json", "--duration", "3.0", "--exit-on-error"),
+            run_proc(*btview, "record", *conn, "--duration", "3.0", "-o", str(rec)))  # the clock runs while it connects
         flipper.cancel()
         await ticker.stop()
     (rc1, snap, e1), (rc2, info, e2), (rc3, bb, e3), (rc4, echo, e4), (rc5, _, e5) = results
