@@ -323,7 +323,8 @@ _LOADED_MAX = 16
 
 
 def load_world(name_or_path: str | Path) -> World:
-    """Load a world by shipped name ('apartment', 'round_obstacles') or by path.
+    """Load a world by shipped name ('apartment', 'round_obstacles') or by path: a world file,
+    or a ROS map_server map (YAML + PGM/PNG, see ``sim.map_world``).
 
     A campaign loads the same world for every run: a file is parsed and validated once per
     process (while its modification time and size stay the same) and each caller gets its own
@@ -341,7 +342,9 @@ def load_world(name_or_path: str | Path) -> World:
             raise WorldError(f"{path}: not valid YAML: {err}") from None
         if not isinstance(data, dict):
             raise WorldError(f"{path}: (top level): a world file is a mapping")
-        world = world_from_dict(data, str(path))
+        from .map_world import looks_like_map, world_from_map
+
+        world = world_from_map(path, data) if looks_like_map(data) else world_from_dict(data, str(path))
         if len(_LOADED) >= _LOADED_MAX:
             _LOADED.pop(next(iter(_LOADED)))
         _LOADED[key] = world
