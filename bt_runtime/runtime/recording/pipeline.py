@@ -5,11 +5,14 @@ no serialization, no I/O). When the queue is full the message is dropped and cou
 topic, never waited for. The thread converts (``convert``), serializes once (``types``) and
 logs the bytes on the topic's channel, which feeds the bag's open segment and the live server;
 every ``flush_interval_s`` wall seconds it closes the bag's segment. It works in slices of at
-most ``slice_s`` (0.5 ms) and then releases the GIL, so a tick waits at most that long for it.
+most ``slice_s`` (0.5 ms) and then releases the GIL; in real time it also keeps out of the
+millisecond before each tick deadline (``tick_guard``), so the tick finds the GIL free.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import threading
 import time
 from collections import deque
@@ -28,6 +31,9 @@ if TYPE_CHECKING:
 log = structlog.get_logger("bt_runtime.recording")
 
 LATCHED_TYPES = {"nav_msgs/msg/OccupancyGrid"}
+# kinds whose conversion has one output (on the item's topic) and keeps no state
+SKIPPABLE = {"scan", "imu", "battery", "plan", "command", "tree_log", "diagnostics", "supervisor_event",
+             "gate_event", "odometry", "event"}
 
 
 class RecordPipeline:
@@ -48,6 +54,8 @@ class RecordPipeline:
         self.errors = 0
         self.max_queued = 0
         self.cpu_s = 0.0  # the writer thread's CPU time
+        # (first tick's monotonic time, tick period) in real time: the writer works between ticks
+        self.tick_guard: tuple[float, float] | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -81,6 +89,8 @@ class RecordPipeline:
 
     # -- the writer thread -------------------------------------------------------------------------
     def _run(self) -> None:
+        with contextlib.suppress(AttributeError, OSError):  # lower priority than the loop's thread
+            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 10)
         queue = self.queue
         clock = time.perf_counter
         slice_s = self.slice_s
@@ -91,6 +101,13 @@ class RecordPipeline:
             if n > self.max_queued:
                 self.max_queued = n
             while queue:
+                guard = self.tick_guard
+                if guard is not None:  # real time: keep out of the way of the next tick
+                    origin, period = guard
+                    to_next = period - (time.monotonic() - origin) % period
+                    if to_next < slice_s + 0.0005:
+                        time.sleep(to_next + 0.0015)  # past the deadline and the tick itself
+                        continue
                 end = clock() + slice_s
                 while queue and clock() < end:
                     self._write_one(*queue.popleft())
@@ -113,6 +130,10 @@ class RecordPipeline:
         try:
             if bag is not None:
                 bag.open_segment()
+            elif kind in SKIPPABLE:  # live view only: nothing to convert for a topic nobody watches
+                channel = channels.get(topic)
+                if channel is not None and not channel.has_sinks() and topic not in self.channels.latched:
+                    return
             outputs = CONVERTERS[kind](self.state, topic, t, payload)
             for name, typename, msg in outputs:
                 channel = channels.get(name)

@@ -154,6 +154,9 @@ class Recorder:
         self._tree_keys.append((uid, previous, new))
 
     def _on_tick(self, _status: Any) -> None:
+        if self.pipeline.tick_guard is None and self.runtime.realtime:
+            rt = self.runtime  # the loop's clock is time.monotonic in real time
+            self.pipeline.tick_guard = (rt.clock(), 1.0 / rt.config.tick.rate_hz)
         if self._tree_events:
             self._flush_tree_log()
 
