@@ -175,10 +175,20 @@ def run_merge(args: argparse.Namespace) -> int:
         result = from_recorded(read_results(args.files))
     except ResultsError as exc:
         return _usage(str(exc))
+    if result.specs and all(_is_variant(name) for name in result.specs):  # files of --variants campaigns
+        from sim.scenarios.variant_runs import format_families, format_variant_failures
+
+        format_table, format_failures = format_families, format_variant_failures
     _print_result(result, format_table, format_failures)
     if args.json is not None:
         _write_json(args.json, result.to_dict())
     return _exit_code(result.results)
+
+
+def _is_variant(name: str) -> bool:
+    from sim.scenarios.variants import FAMILIES, family_of
+
+    return family_of(name) in FAMILIES and name != family_of(name)
 
 
 def _print_result(result, format_table, format_failures) -> None:

@@ -107,3 +107,17 @@ def test_the_cli_reports_bad_results_files_and_flags_as_usage_errors(tmp_path, c
     assert "--ray-address needs --backend ray" in capsys.readouterr().err
     assert main(["scenarios", "--only", "Lidar_1", "--shard", "3/2"]) == 2
     assert "K must be between 1 and N" in capsys.readouterr().err
+
+
+def test_merged_variant_results_are_summarised_per_family(tmp_path, capsys):
+    from bt_runtime.__main__ import main
+    from sim.scenarios.variants import family_of, generate
+
+    plan = generate(3, 0, modes=("with",))
+    path = tmp_path / "variants.jsonl"
+    _write(path, [spec_line(r.scenario) for r in plan] + [_line(r, success=True) for r in plan])
+    assert main(["scenarios", "merge", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("Family")
+    for r in plan:
+        assert f"{family_of(r.scenario.name):<18}with" in out
