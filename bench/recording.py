@@ -14,9 +14,12 @@ drift affects them alike:
 Prints per configuration the median CPU (user+sys of the process) and wall time over rounds,
 the CPU ratio to the baseline of the same round (median, min-max), the writer thread's own CPU,
 the messages written and dropped. A second part runs --realtime pairs (baseline, record) and
-prints the tick lateness p99 of each, to show recording does not delay ticks.
+prints the tick lateness p50/p99 of each, to show recording does not delay ticks. A third part
+(--inprocess) measures the run phase alone, in one process: CPU (all threads) from
+``runtime.start()`` to the bag closed, baseline and record interleaved, so start-up (imports)
+is left out: the steady-state cost per robot second.
 
-Run: python bench/recording.py [--duration 40] [--rounds 3] [--realtime-seconds 15]
+Run: python bench/recording.py [--duration 40] [--rounds 3] [--realtime-seconds 15] [--inprocess]
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+if sys.path and Path(sys.path[0]).resolve() == ROOT / "bench":  # bench/sim.py would shadow the sim package
+    sys.path[0] = str(ROOT)
 CONFIGS = {"baseline": [], "record": ["--record", "{dir}/bag"], "foxglove": ["--foxglove", "0"],
            "both": ["--record", "{dir}/bag", "--foxglove", "0"]}
 
@@ -54,7 +59,61 @@ def run_once(extra: list[str], duration: float, realtime: bool = False) -> dict:
     rec = data.get("recording") or {}
     return {"cpu": cpu, "wall": wall, "writer_cpu": rec.get("writer_cpu_s", 0.0),
             "messages": rec.get("message_count", 0), "dropped": sum((rec.get("dropped") or {}).values()),
-            "lateness_p99_us": data.get("lateness_p99_ms", 0.0) * 1e3, "sim_time": data.get("sim_time", 0.0)}
+            "lateness_p99_us": data.get("lateness_p99_ms", 0.0) * 1e3,
+            "lateness_p50_us": data.get("lateness_p50_ms", 0.0) * 1e3, "sim_time": data.get("sim_time", 0.0)}
+
+
+def inprocess(duration: float, rounds: int) -> None:
+    import asyncio
+    import shutil
+
+    from bt_runtime.cli.registration import registrations
+    from bt_runtime.logging_setup import quiet_logging
+    from bt_runtime.runtime.app import AutonomyRuntime
+    from bt_runtime.runtime.clock import run as run_loop
+    from bt_runtime.runtime.messages import Pose2D
+    from bt_runtime.runtime.recording.cli import Recording
+    from sim.driver import SimDriver
+    from sim.recording import recording_hooks
+
+    quiet_logging("error")
+    regs = registrations(argparse.Namespace(register=[], no_nodes=False))
+
+    async def one(record: bool, folder: Path) -> tuple[float, int]:
+        driver = SimDriver("apartment", "burger", seed=0)
+        rt = AutonomyRuntime(driver, register=regs)
+        rt.load_tree(ROOT / "trees" / "autonomy.xml")
+        g = driver.sim.world.goal("yard_east")
+        bb = rt.tree.root_blackboard
+        bb.set("goal", Pose2D(g.x, g.y, 0.0))
+        bb.set("goal_status", "PENDING")
+        rec = Recording(bag=folder) if record else None
+        c0 = time.process_time()
+        if rec is not None:
+            rec.start(rt, recording_hooks(driver))
+        await rt.start()
+        await asyncio.sleep(duration)
+        await rt.stop()
+        report = rec.stop() if rec is not None else {}
+        return time.process_time() - c0, report.get("message_count", 0)
+
+    rows: dict[str, list[float]] = {"baseline": [], "record": []}
+    n = 0
+    with tempfile.TemporaryDirectory() as tmp:
+        run_loop(one(True, Path(tmp) / "warm"), virtual=True)  # imports and serializer code generation
+        for r in range(rounds):
+            for name in rows:
+                folder = Path(tmp) / f"{name}{r}"
+                cpu, msgs = run_loop(one(name == "record", folder), virtual=True)
+                rows[name].append(cpu)
+                n = max(n, msgs)
+                shutil.rmtree(folder, ignore_errors=True)
+    base, rec = statistics.median(rows["baseline"]), statistics.median(rows["record"])
+    ratios = [b2 / b1 - 1 for b1, b2 in zip(rows["baseline"], rows["record"])]
+    print(f"\nrun phase only (in process, {duration:g} s robot time, {rounds} rounds): CPU baseline {base:.3f} s, "
+          f"record {rec:.3f} s: {statistics.median(ratios):+.1%} ({min(ratios):+.1%}..{max(ratios):+.1%}); "
+          f"{n} messages, {(rec - base) / max(n, 1) * 1e6:.0f} us CPU a message; "
+          f"{base / duration * 1e3:.1f} vs {rec / duration * 1e3:.1f} ms CPU per robot second")
 
 
 def main() -> None:
@@ -63,7 +122,13 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--configs", default="baseline,record,foxglove,both")
     ap.add_argument("--realtime-seconds", type=float, default=15.0, help="0: skip the real-time part")
+    ap.add_argument("--inprocess", action="store_true", help="also measure the run phase alone, in process")
+    ap.add_argument("--skip-processes", action="store_true", help="only the in-process part")
     args = ap.parse_args()
+    if args.inprocess:
+        inprocess(args.duration, args.rounds)
+    if args.skip_processes:
+        return
     names = [n for n in args.configs.split(",") if n]
     results: dict[str, list[dict]] = {n: [] for n in names}
     for r in range(args.rounds):
@@ -91,7 +156,8 @@ def main() -> None:
         print(f"\nreal time, {args.realtime_seconds:g} s: tick lateness p99 (us)")
         for name in ("baseline", "record"):
             row = run_once(CONFIGS[name], args.realtime_seconds, realtime=True)
-            print(f"{name:<10} p99 {row['lateness_p99_us']:8.1f}  CPU {row['cpu']:.2f} s  dropped {row['dropped']}")
+            print(f"{name:<10} p50 {row['lateness_p50_us']:8.1f}  p99 {row['lateness_p99_us']:8.1f}  "
+                  f"CPU {row['cpu']:.2f} s  dropped {row['dropped']}")
 
 
 if __name__ == "__main__":
