@@ -21,15 +21,23 @@ from .campaign_support import by_key, cheap_plan
 pytest.importorskip("ray")
 
 
-def _descendants(pid: int) -> set[int]:
-    children: dict[int, list[int]] = {}
+def _processes() -> dict[int, tuple[int, str]]:
+    """Every live process: pid -> (parent pid, state)."""
+    out = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             fields = stat.read_text().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        if fields[0] != "Z":
-            children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+        out[int(stat.parent.name)] = (int(fields[1]), fields[0])
+    return out
+
+
+def _descendants(pid: int) -> set[int]:
+    procs = _processes()
+    children: dict[int, list[int]] = {}
+    for child, (parent, _) in procs.items():
+        children.setdefault(parent, []).append(child)
     out, todo = set(), [pid]
     while todo:
         for child in children.get(todo.pop(), []):
@@ -38,16 +46,30 @@ def _descendants(pid: int) -> set[int]:
     return out
 
 
+def _alive(pids: set[int]) -> set[int]:
+    """Those still running, wherever they were re-parented (zombies count as gone)."""
+    procs = _processes()
+    return {p for p in pids if p in procs and procs[p][1] != "Z"}
+
+
+def _is_ray(pid: int) -> bool:
+    try:
+        return b"ray" in (Path("/proc") / str(pid) / "cmdline").read_bytes()
+    except OSError:
+        return False
+
+
 @pytest.fixture(scope="module")
 def ray_backend():
     from sim.scenarios.ray_backend import RayBackend
 
     backend = RayBackend(num_cpus=2)
-    started = _descendants(os.getpid())
     yield backend
+    started = {p for p in _descendants(os.getpid()) if _is_ray(p)}  # Ray's daemons and its workers
+    assert len(started) >= 3, "a local Ray runs in processes of its own (GCS, raylet, workers)"
     backend.close()
     deadline = time.monotonic() + 15
-    while (left := started & _descendants(os.getpid())) and time.monotonic() < deadline:
+    while (left := _alive(started)) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not left, f"Ray processes left after shutdown: {sorted(left)}"
 
