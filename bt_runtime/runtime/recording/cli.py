@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -111,6 +112,10 @@ class Recording:
 
                 self.live = FoxgloveLive(channels, self.foxglove_port, self.foxglove_host)
         except (OSError, RuntimeError) as exc:
+            if self.writer is not None:  # the bag folder was made for nothing: leave no empty bag
+                with contextlib.suppress(OSError):
+                    self.writer.path.rmdir()
+                self.writer = None
             raise RecordingError(f"{exc}") from None
         state = ConvertState(frames=opts.frames, tf_topic=opts.topics.tf)
         pipeline = RecordPipeline(channels, bag=self.writer, live=self.live, state=state,

@@ -26,8 +26,11 @@ class FoxgloveLive:
         self._latched: dict[str, tuple[Any, int, bytes]] = {}
         self._lock = threading.Lock()
         self._last_time_ns = -(2**62)
-        self.server = foxglove.start_server(name=name, host=host, port=port, context=channels.context,
-                                            capabilities=[Capability.Time], server_listener=_listener(self))
+        try:
+            self.server = foxglove.start_server(name=name, host=host, port=port, context=channels.context,
+                                                capabilities=[Capability.Time], server_listener=_listener(self))
+        except Exception as exc:  # the SDK's FoxgloveError: a port in use, a bad address
+            raise OSError(f"--foxglove: cannot serve on {host}:{port}: {exc}") from None
         self.host = host
         self.port = self.server.port
 
