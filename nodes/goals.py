@@ -86,6 +86,8 @@ class RetryGoal(ControlNode):
         self._phase = WAIT
         self._wait_until = 0.0
         self._delay = 0.0
+        self._budget = 0.0
+        self._needs: list[str] | None = None
         super().__init__(name, config)
 
     def _now(self) -> float:
@@ -103,8 +105,9 @@ class RetryGoal(ControlNode):
         goal = self.get_input("goal", None)
         if goal != self._key:  # a new goal: a new budget
             self._key, self._started, self._attempts = goal, now, 0
+            self._budget = self.get_input("budget")
             self._phase, self._wait_until, self._delay = WAIT, now, self.get_input("backoff")
-        budget = self.get_input("budget")
+        budget = self._budget
         self.set_status(RUNNING)
         while True:
             if self._phase is ATTEMPT:
@@ -141,11 +144,10 @@ class RetryGoal(ControlNode):
             self._phase = ATTEMPT
 
     def _healthy(self) -> bool:
-        names = self.get_input("components", [])
-        if not names:
-            return True
+        if self._needs is None:
+            self._needs = list(self.get_input("components", []))
         sup = self.context.supervisor
-        return all(sup.health(n) is Health.OK for n in names)
+        return all(sup.health(n) is Health.OK for n in self._needs)
 
     def _give_up(self, now: float, budget: float) -> NodeStatus:
         code = self.get_input("error_code", 0) or 0

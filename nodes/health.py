@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 
 from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActionNode, SyncActionNode
+from bt_runtime.node import NodeConfig
 from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.supervisor import Health
 
@@ -46,10 +47,16 @@ class ComponentsHealthy(ConditionNode):
         return [input_port("components", NAMES, "", "names separated by ';' (empty: all)"),
                 output_port("unhealthy", NAMES, "{unhealthy}", "the components that are not OK")]
 
+    def __init__(self, name: str, config: NodeConfig | None = None):
+        self._written: list[str] | None = None
+        super().__init__(name, config)
+
     def tick(self):
-        sup = self.context.supervisor
-        bad = [n for n in _names(self) if sup.is_failed(n)]
-        self.set_output("unhealthy", bad)
+        names = self.get_input("components", [])
+        bad = self.context.supervisor.failed_among(list(names) if names else None)
+        if bad != self._written:  # writing an unchanged list every tick costs more than the check
+            self._written = bad
+            self.set_output("unhealthy", bad)
         return FAILURE if bad else SUCCESS
 
 
@@ -220,5 +227,5 @@ class IsSafeToContinue(ConditionNode):
         ctx = self.context
         if ctx.gate.estop_active:
             return FAILURE
-        sup = ctx.supervisor
-        return FAILURE if any(sup.health(n) is Health.DEAD for n in _names(self)) else SUCCESS
+        names = self.get_input("components", [])
+        return FAILURE if ctx.supervisor.any_dead(list(names) if names else None) else SUCCESS

@@ -40,6 +40,16 @@ def free_distances(scan: LaserScan, half_width: float, radius: float) -> tuple[f
     return max(ahead, 0.0), max(behind, 0.0)
 
 
+def allowed_speed(free: float, deceleration: float, reaction: float, margin: float) -> float:
+    """The fastest speed that still stops ``margin`` short of an obstacle ``free`` m away:
+    v * reaction + v^2 / (2 * deceleration) = free - margin."""
+    room = free - margin
+    if room <= 0.0:
+        return 0.0
+    a, t = deceleration, reaction
+    return a * (-t + math.sqrt(t * t + 2.0 * room / a))
+
+
 class StopBeforeObstacle(SyncActionNode):
     """Cap the speed towards an obstacle on the scan so the robot stops before it (always
     SUCCESS; ``free_ahead`` reports the free distance in the direction of motion)."""
@@ -57,40 +67,43 @@ class StopBeforeObstacle(SyncActionNode):
         self._scan_id = 0
         self._free = (math.inf, math.inf)
         self._overriding = False
+        self._params: tuple[float, ...] | None = None
+        self._reported = math.nan
         super().__init__(name, config)
+
+    def _settings(self) -> tuple[float, ...]:
+        """The ports, read once (literal settings; a tick must stay cheap)."""
+        if self._params is None:
+            self._params = tuple(float(self.get_input(n)) for n in
+                                 ("deceleration", "reaction", "margin", "side_margin", "max_scan_age"))
+        return self._params
 
     def tick(self):
         ctx = self.context
         backup = ctx.backup
+        decel, reaction, margin, side_margin, max_age = self._settings()
         scan = backup.latest("scan")
         age = backup.age("scan")
-        if scan is None or age is None or age > self.get_input("max_scan_age"):
+        if scan is None or age is None or age > max_age:
             return self._let_go()
         if id(scan) != self._scan_id:
             self._scan_id = id(scan)
             radius = ctx.robot.radius
-            self._free = free_distances(scan, radius + self.get_input("side_margin"), radius)
+            self._free = free_distances(scan, radius + side_margin, radius)
         nav = backup.latest("nav_cmd_vel")
         if nav is None or ctx.gate.tree_command_active and not self._overriding:
             return self._let_go()  # someone else in the tree is driving
         v = nav.linear
         free = self._free[0] if v >= 0 else self._free[1]
-        allowed = self._allowed_speed(free)
-        self.set_output("free_ahead", float(free))
+        if not abs(free - self._reported) < 0.01:
+            self._reported = free
+            self.set_output("free_ahead", float(free))
+        allowed = allowed_speed(free, decel, reaction, margin)
         if abs(v) <= allowed:
             return self._let_go()
         ctx.gate.set_tree_command(math.copysign(allowed, v), nav.angular)
         self._overriding = True
         return SUCCESS
-
-    def _allowed_speed(self, free: float) -> float:
-        """The fastest speed that still stops ``margin`` short of an obstacle ``free`` m away."""
-        room = free - self.get_input("margin")
-        if room <= 0.0:
-            return 0.0
-        a, t = self.get_input("deceleration"), self.get_input("reaction")
-        # v t + v^2 / 2a = room  ->  v = a (-t + sqrt(t^2 + 2 room / a))
-        return a * (-t + math.sqrt(t * t + 2.0 * room / a))
 
     def _let_go(self):
         if self._overriding:

@@ -98,6 +98,7 @@ class SystemSupervisor:
         self._unsubscribe: list[Callable[[], None]] = []
         self._started_at = 0.0
         self._listeners: list[Callable[[SupervisorEvent], Any]] = []
+        self._dead: set[str] = set()
 
     # -- setup ---------------------------------------------------------------------------------
     def attach(self) -> None:
@@ -248,6 +249,8 @@ class SystemSupervisor:
         now = self.clock()
         record.state = state
         record.state_since = now
+        if state is Health.DEAD:
+            self._dead.add(record.name)
         event = SupervisorEvent(now, record.name, state, previous, reason)
         self.events.append(event)
         log.info("component_state", component=record.name, state=state.value, previous=previous.value,
@@ -273,6 +276,32 @@ class SystemSupervisor:
 
     def all_healthy(self, names: list[str] | None = None) -> bool:
         return all(self.health(n) is Health.OK for n in (names or self.components))
+
+    def failed_among(self, names: list[str] | None = None) -> list[str]:
+        """The components of ``names`` (every one but the tree when None) that are FAILED,
+        RESTARTING or DEAD, or whose timeout just expired: one pass for condition nodes that
+        ask about many components on every tick."""
+        now = self.clock()
+        records = self.components
+        out = []
+        for name in (names if names is not None else records):
+            record = records.get(name)
+            if record is None or (names is None and name == "tree"):
+                continue
+            state = record.state
+            if state is Health.OK:
+                seen = record.last_seen
+                if record.watched and seen is not None and now - seen > record.timeout:
+                    out.append(name)
+            elif state is not Health.UNKNOWN:
+                out.append(name)
+        return out
+
+    def any_dead(self, names: list[str] | None = None) -> bool:
+        """Is one of ``names`` (any component when None) DEAD? (cheap: a DEAD state is stored)."""
+        if not self._dead:
+            return False
+        return names is None or any(n in self._dead for n in names)
 
     def is_failed(self, name: str) -> bool:
         """FAILED, RESTARTING or DEAD: not merely unknown (start-up grace)."""

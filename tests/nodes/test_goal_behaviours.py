@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from bt_runtime.runtime.messages import LaserScan, Pose2D, Twist
-from nodes.motion_safety import StopBeforeObstacle, free_distances
+from nodes.motion_safety import allowed_speed, free_distances
 from tests.helpers import tree_xml
 
 KEEP = '<KeepRunningUntilFailure><ForceSuccess>{}</ForceSuccess></KeepRunningUntilFailure>'
@@ -118,13 +118,11 @@ def test_free_distance_counts_only_the_swept_corridor():
 
 
 def test_allowed_speed_stops_short_of_the_obstacle():
-    node = StopBeforeObstacle("stop")
-    node.get_input = lambda name, default=None: {"deceleration": 0.5, "reaction": 0.2, "margin": 0.05}[name]
-    assert node._allowed_speed(0.05) == 0.0
+    assert allowed_speed(0.05, 0.5, 0.2, 0.05) == 0.0
     for free in (0.1, 0.3, 1.0):
-        v = node._allowed_speed(free)
+        v = allowed_speed(free, 0.5, 0.2, 0.05)
         assert abs(v * 0.2 + v * v / (2 * 0.5) - (free - 0.05)) < 1e-9
-    assert node._allowed_speed(0.3) > 0.25  # cruising at 0.25 m/s is not limited 30 cm out
+    assert allowed_speed(0.3, 0.5, 0.2, 0.05) > 0.25  # cruising at 0.25 m/s is not limited 30 cm out
 
 
 async def test_the_robot_is_held_before_an_obstacle_the_scan_shows(runtime):

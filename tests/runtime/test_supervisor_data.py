@@ -63,3 +63,20 @@ def test_scalar_streams_must_be_finite_and_advance():
     assert check(Imu(1.0, 0.0, 0.1, 0.0)) is None
     assert check(Imu(1.0, 0.0, 0.1, 0.0)) == "stale data: timestamps not advancing"
     assert check(Imu(2.0, float("nan"), 0.1, 0.0)) == "invalid data: non-finite values"
+
+
+async def test_one_pass_queries_agree_with_the_per_component_ones(make_runtime):
+    rt = make_runtime()
+    await rt.start()
+    await asyncio.sleep(1.0)
+    sup = rt.supervisor
+    assert sup.failed_among() == [] and not sup.any_dead()
+    rt.driver.sim.crash("lidar")
+    await asyncio.sleep(1.2)
+    assert sup.failed_among() == [n for n in sup.components if n != "tree" and sup.is_failed(n)] == ["lidar"]
+    assert sup.failed_among(["imu", "lidar"]) == ["lidar"]
+    rt.driver.sim.faults.set_restart_policy("lidar", delay=0.1, fail_next=5)
+    await sup.restart("lidar")
+    await sup.restart("lidar")
+    assert sup.any_dead() and sup.any_dead(["lidar"]) and not sup.any_dead(["imu"])
+    await rt.stop()
