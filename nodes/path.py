@@ -209,7 +209,7 @@ class EscapeInflation(AsyncActionNode):
                 best_angle, best = a, c
         if best_angle is None:
             return FAILURE
-        turn = (best_angle - pose.yaw + math.pi) % (2 * math.pi) - math.pi
+        turn = wrap_angle(best_angle - pose.yaw)
         log.info("escape_inflation", clearance=round(here, 3), heading=round(best_angle, 2),
                  target_clearance=round(best, 3))
         if abs(turn) > 0.15:

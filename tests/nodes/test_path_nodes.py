@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from bt_runtime.runtime.messages import ActionStatus, NavErrorCode, NavResult, Path, Pose2D
+from bt_runtime.runtime.messages import ActionStatus, NavErrorCode, NavResult, Path, Pose2D, RobotInfo
 from bt_runtime.status import NodeStatus
 from nodes import register_autonomy_nodes
 from nodes.path import ring_candidates
@@ -68,38 +68,61 @@ def test_ring_candidates_cover_every_direction_on_each_ring():
     assert first_ring == {(0.1, 0.0), (0.0, 0.1), (-0.1, 0.0), (0.0, -0.1)}  # no robot: starts at +x
 
 
-def _plans(*codes: int) -> list[NavResult]:
-    return [NavResult(ActionStatus.SUCCEEDED, NavErrorCode.NONE, "", _line((0, 0), (1, 1))) if c == 0
-            else NavResult(ActionStatus.ABORTED, NavErrorCode(c), "no") for c in codes]
+def _plans(*lengths: float | NavErrorCode) -> list[NavResult]:
+    """Planner answers in order: a number is a straight path of that length, a code an abort."""
+    return [NavResult(ActionStatus.ABORTED, x, "no") if isinstance(x, NavErrorCode)
+            else NavResult(ActionStatus.SUCCEEDED, NavErrorCode.NONE, "", _line((0, 0), (x, 0))) for x in lengths]
 
 
-async def _search(plans: list[NavResult], **attrs):
+def _search_context(plans: list[NavResult], clearance=lambda pose: 1.0):
     ctx = fake_context()
+    ctx.robot = RobotInfo()
     ctx.backup.pose(-2.0, 0.0)
     ctx.navigation.plan_results = plans
+    ctx.navigation.path_clearance = lambda path: clearance(Pose2D(*path.points[0]))
+    return ctx
+
+
+async def _search(ctx, **attrs):
     extra = "".join(f' {k}="{v}"' for k, v in attrs.items())
-    tree, _ = build(f'<FindAlternativeGoal goal="{{goal}}"{extra}/>', ctx, register=(register_autonomy_nodes,),
-                    bb_init={"goal": GOAL})
+    tree, _ = build(f'<FindAlternativeGoal goal="{{goal}}" step="0.5" max_radius="1.0" directions="4"{extra}/>',
+                    ctx, register=(register_autonomy_nodes,), bb_init={"goal": GOAL})
+    before = len(ctx.navigation.calls)
     status = await tree.tick_while_running_async()
-    asked = [call[1][0] for call in ctx.navigation.calls if call[0] == "compute_path_to_pose"]
+    asked = [call[1][0] for call in ctx.navigation.calls[before:] if call[0] == "compute_path_to_pose"]
     return status, tree.root_blackboard, asked
 
 
-async def test_the_first_reachable_candidate_wins_and_is_written_with_its_path():
-    occupied = NavErrorCode.GOAL_OCCUPIED
-    status, bb, asked = await _search(_plans(occupied, occupied, 0), step="0.5", max_radius="1.0")
-    assert status is S and len(asked) == 3 and bb.get("alternatives_tried") == 3
-    assert bb.get("nav_goal") == asked[2] and len(bb.get("path")) == 2
-    assert asked[0].distance_to(GOAL) == pytest.approx(0.5) and asked[0].x < GOAL.x  # nearest, robot side first
+async def test_the_cheapest_reachable_candidate_of_the_nearest_ring_wins_and_is_kept():
+    no = NavErrorCode.NO_VALID_PATH
+    ctx = _search_context(_plans(no, no, 5.0, 2.0))  # ring 1 (0.5 m): two unreachable, a long and a short path
+    status, bb, asked = await _search(ctx, extra_rings="0")
+    assert status is S and len(asked) == 4 and bb.get("alternatives_tried") == 4
+    assert all(p.distance_to(GOAL) == pytest.approx(0.5) for p in asked)  # the nearest ring only
+    assert asked[0].x < GOAL.x  # the candidate on the robot's side is tried first
+    assert bb.get("nav_goal") == asked[3] and bb.get("path").length == pytest.approx(2.0)
+    assert "0.50 m from the requested goal" in bb.get("goal_detail")
+    ctx.navigation.plan_results = _plans(2.0)
+    status, bb, asked_again = await _search(ctx, extra_rings="0")  # the same goal again
+    assert status is S and asked_again == [asked[3]] and bb.get("alternatives_tried") == 1
+
+
+async def test_candidates_too_close_to_obstacles_are_not_planned_to_while_clearer_ones_exist():
+    ctx = _search_context(_plans(1.0, 1.0), clearance=lambda pose: 0.1 if abs(pose.y) > 0.01 else 1.0)
+    status, bb, asked = await _search(ctx, extra_rings="0")
+    assert status is S and all(abs(p.y) <= 0.01 for p in asked) and len(asked) == 2
 
 
 async def test_no_reachable_candidate_fails_after_trying_them_all():
-    status, bb, asked = await _search(_plans(*[NavErrorCode.NO_VALID_PATH] * 8), step="0.5", max_radius="1.0",
-                                      directions="4")
-    assert status is F and len(asked) == 8 and bb.get("alternatives_tried") == 8
-    assert math.isclose(max(p.distance_to(GOAL) for p in asked), 1.0)
+    ctx = _search_context(_plans(*[NavErrorCode.NO_VALID_PATH] * 16))
+    status, bb, asked = await _search(ctx)
+    assert status is F and bb.get("alternatives_tried") == 8
+    assert {(round(p.x, 6), round(p.y, 6)) for p in asked} == \
+        {(round(GOAL.x + r * math.cos(a), 6), round(r * math.sin(a), 6))
+         for r in (0.5, 1.0) for a in (0, math.pi / 2, math.pi, -math.pi / 2)}  # every candidate was asked
 
 
 async def test_a_planner_that_is_down_stops_the_search():
-    status, bb, asked = await _search(_plans(NavErrorCode.PLANNER_UNKNOWN, 0))
-    assert status is F and len(asked) == 1 and bb.get("alternatives_tried") == 1
+    ctx = _search_context(_plans(*[NavErrorCode.PLANNER_UNKNOWN] * 16))
+    status, bb, asked = await _search(ctx)
+    assert status is F and 1 <= len(asked) <= 2  # at most one try per clearance level, not all 8 candidates
