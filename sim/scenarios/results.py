@@ -14,11 +14,33 @@ import json
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Literal
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from .runspec import run_key
 from .spec import ScenarioSpec
+
+
+class VerdictLine(BaseModel):
+    criterion: str
+    passed: bool
+    reason: str
+
+
+class RunLine(BaseModel):
+    """What a run record must hold (more fields, e.g. host, cpu_time, artifacts, are kept as they are)."""
+
+    model_config = ConfigDict(extra="allow")
+    key: str
+    scenario: str
+    mode: Literal["with", "without"]
+    run: int = Field(ge=0)
+    seed: int
+    success: bool
+    sim_time: float = 0.0
+    wall_time: float = 0.0
+    verdicts: list[VerdictLine]
 
 
 class ResultsError(ValueError):
@@ -86,9 +108,14 @@ def _read_line(recorded: Recorded, raw: str, where: str) -> None:
         except (KeyError, ValidationError) as exc:
             raise ResultsError(f"{where}: bad scenario record: {exc}") from None
     elif kind == "run":
-        missing = [k for k in ("key", "scenario", "mode", "run", "seed", "success", "verdicts") if k not in line]
-        if missing:
-            raise ResultsError(f"{where}: run record without {', '.join(missing)}")
+        try:
+            run = RunLine.model_validate(line)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            field_name = ".".join(str(p) for p in first["loc"])
+            raise ResultsError(f"{where}: run record: {field_name}: {first['msg']}") from None
+        if run.key != run_key(run.scenario, run.mode, run.run):
+            raise ResultsError(f"{where}: run record: key {run.key!r} does not match its scenario, mode and run")
         recorded.add_run(line, where)
     else:
         raise ResultsError(f"{where}: unknown record type {kind!r} (expected 'scenario' or 'run')")

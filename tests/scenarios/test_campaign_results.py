@@ -50,6 +50,13 @@ def test_a_bad_line_names_file_and_line(tmp_path):
     path.write_text('{"type": "scenario"}\n', encoding="utf-8")
     with pytest.raises(ResultsError, match=r"r\.jsonl:1: bad scenario record"):
         read_results([path])
+    run = cheap_plan(runs=1)[0]
+    path.write_text(json.dumps({**_line(run), "mode": "sometimes"}) + "\n", encoding="utf-8")
+    with pytest.raises(ResultsError, match=r"r\.jsonl:1: run record: mode: "):
+        read_results([path])
+    path.write_text(json.dumps({**_line(run), "run": 7}) + "\n", encoding="utf-8")
+    with pytest.raises(ResultsError, match="does not match its scenario, mode and run"):
+        read_results([path])
     path.write_text("[1, 2]\n", encoding="utf-8")
     with pytest.raises(ResultsError, match=r"r\.jsonl:1: unknown record type"):
         read_results([path])
@@ -102,7 +109,7 @@ def test_the_cli_reports_bad_results_files_and_flags_as_usage_errors(tmp_path, c
     bad = tmp_path / "bad.jsonl"
     bad.write_text('{"type": "run", "key": "x"}\n', encoding="utf-8")
     assert main(["scenarios", "merge", str(bad)]) == 2
-    assert f"{bad}:1: run record without scenario" in capsys.readouterr().err
+    assert f"{bad}:1: run record: scenario: Field required" in capsys.readouterr().err
     assert main(["scenarios", "--only", "Lidar_1", "--ray-address", "auto"]) == 2
     assert "--ray-address needs --backend ray" in capsys.readouterr().err
     assert main(["scenarios", "--only", "Lidar_1", "--shard", "3/2"]) == 2
