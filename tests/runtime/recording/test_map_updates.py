@@ -1,0 +1,67 @@
+"""/map is recorded at start and again when the navigation map changes (a collision mark), and
+the drops of a full queue are counted, not waited for."""
+
+from __future__ import annotations
+
+import asyncio
+
+import numpy as np
+import pytest
+
+pytest.importorskip("foxglove")
+AnyReader = pytest.importorskip("rosbags.highlevel").AnyReader
+
+from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
+from bt_runtime.runtime.clock import run as run_loop  # noqa: E402
+from bt_runtime.runtime.recording.cli import Recording  # noqa: E402
+from bt_runtime.runtime.recording.config import RecordingOptions  # noqa: E402
+from sim.driver import SimDriver  # noqa: E402
+from sim.recording import recording_hooks  # noqa: E402
+
+TREE = """<root BTCPP_format="4"><BehaviorTree ID="Main"><Sleep msec="100000"/></BehaviorTree></root>"""
+
+
+def _record(folder, options: RecordingOptions, body) -> dict:
+    async def main() -> dict:
+        driver = SimDriver("apartment", "burger", seed=1)
+        runtime = AutonomyRuntime(driver)
+        runtime.load_tree(TREE)
+        recording = Recording(bag=folder, options=options).start(runtime, recording_hooks(driver))
+        await runtime.start()
+        await body(driver)
+        await runtime.stop()
+        return recording.stop()
+
+    return run_loop(main(), virtual=True)
+
+
+def test_a_collision_mark_records_the_map_again(tmp_path):
+    async def body(driver) -> None:
+        await asyncio.sleep(1.0)
+        await driver.navigation.add_obstacle(1.0, 0.5, 0.3)
+        await asyncio.sleep(1.0)
+
+    report = _record(tmp_path / "bag", RecordingOptions(), body)
+    assert report["messages"]["/map"] == 2
+    with AnyReader([tmp_path / "bag"]) as reader:
+        maps = [reader.deserialize(raw, c.msgtype) for c, _t, raw in
+                reader.messages([c for c in reader.connections if c.topic == "/map"])]
+    before, after = (np.asarray(m.data) for m in maps)
+    assert maps[0].info.width * maps[0].info.height == before.size
+    assert int((after == 100).sum()) > int((before == 100).sum()), "the mark is in the second map"
+
+
+def test_a_full_queue_drops_and_counts(tmp_path):
+    async def body(driver) -> None:
+        await asyncio.sleep(2.0)
+
+    from bt_runtime.runtime.recording import pipeline
+
+    original = pipeline.RecordPipeline.start
+    pipeline.RecordPipeline.start = lambda self: None  # a writer that never runs: the queue fills up
+    try:
+        report = _record(tmp_path / "bag", RecordingOptions(queue_size=100), body)
+    finally:
+        pipeline.RecordPipeline.start = original
+    assert report["dropped"].get("/odom", 0) > 0 and report["dropped"].get("/imu", 0) > 0
+    assert report["message_count"] == 0  # the run went on: 2 s of robot time with nothing written
