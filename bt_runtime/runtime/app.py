@@ -33,6 +33,7 @@ from .config import RuntimeConfig
 from .context import RuntimeContext
 from .driver import RobotDriver
 from .gate import DecisionGate
+from .goal_intake import GoalHandle, GoalIntake
 from .messages import RobotInfo
 from .shutdown import register_live, settle, unregister_live
 from .supervisor import SystemSupervisor
@@ -96,6 +97,7 @@ class AutonomyRuntime:
             registration(self.factory)
         self.tree: Tree | None = None
         self.tick_loop: TickLoop | None = None
+        self.goals = GoalIntake(self)  # goals from the API and the driver's clients (goal_intake.py)
         self.completed: asyncio.Future = self.loop.create_future()
         self._tick_task: asyncio.Task | None = None
         self._service_tasks: list[asyncio.Task] = []
@@ -148,6 +150,7 @@ class AutonomyRuntime:
         self.tick_loop.on_tick.append(self._on_tick)
 
     def _on_tick(self, status: NodeStatus) -> None:
+        self.goals.on_tick(status)
         if (status is SUCCESS or status is FAILURE) and not self.completed.done():
             self.completed.set_result(status)
             if self.config.tick.stop_on_completion and "tree" in self.supervisor.components:
@@ -163,6 +166,9 @@ class AutonomyRuntime:
         self._started_sim = self.clock()
         self._grid_origin = self.clock()  # the driver's periodic work starts on this grid
         await self.driver.start()
+        serve_goals = getattr(self.driver, "serve_goals", None)
+        if callable(serve_goals):  # e.g. the ROS 2 driver's NavigateToPose action server
+            serve_goals(self.goals)
         self.backup.attach()
         self.gate.attach()
         self.supervisor.attach()
@@ -223,6 +229,12 @@ class AutonomyRuntime:
         self._start_tick_task()
         return True
 
+    def send_goal(self, pose: Any, *, preempt: bool = True) -> GoalHandle:
+        """Hand a goal (a ``Pose2D``) to the tree through the goal hand-off; await the handle for
+        its result, read ``handle.feedback``, ``handle.cancel()`` to halt it. A new goal preempts
+        the current one unless ``preempt`` is False (then it queues). The tree must be ticking."""
+        return self.goals.submit(pose, preempt=preempt)
+
     async def run(self, duration: float | None = None) -> RunSummary:
         """Run until the tree completes or ``duration`` seconds (loop time) have passed."""
         if duration is None:
@@ -249,6 +261,7 @@ class AutonomyRuntime:
             self._halt_tree_logged()
             await settle(node_tasks, timeout, what="halting the tree")
         self.gate.shutdown()  # the last word: the 'runtime stopped' e-stop holds every later output at zero
+        self.goals.close()
         if self.watchdog is not None:
             self.watchdog.stop()
         self.supervisor.detach()
