@@ -65,9 +65,9 @@ class PlannerParams(_Model):
 
     cost_penalty: float = Field(2.0, ge=0)  # [nav2] Smac2D cost_penalty
     allow_unknown: bool = True  # [tb3] GridBased.allow_unknown
-    # deviation: NavFn's tolerance is 0.5 m (it plans to the nearest free cell); 0 makes an
-    # occupied goal fail with GOAL_OCCUPIED, which the autonomy layer wants to see.
-    tolerance: float = Field(0.0, ge=0)
+    # [nav2] NavFn GridBased.tolerance: an occupied goal is replaced by the nearest plannable
+    # cell within this (square) distance; only beyond it does planning fail (GOAL_OCCUPIED)
+    tolerance: float = Field(0.5, ge=0)
     smooth: bool = True
     # accept the cached relaxed-optimal path if its master cost is within this fraction of the
     # lower bound (bounded suboptimality; 0 = exact). See planner.py.

@@ -189,6 +189,9 @@ class GridPlanner:
             g_rc = self._goal_within_tolerance(g_rc)
             if g_rc is None:
                 return PlanResult(E.GOAL_OCCUPIED, message=f"goal is occupied (cost {g_cost})")
+            # as NavFn: the plan ends at the nearest plannable point, not inside the obstacle
+            gx, gy = self.costmap.cell_to_world(np.array([g_rc[0]]), np.array([g_rc[1]]))
+            goal = Pose2D(float(gx[0]), float(gy[0]), goal.yaw)
         s, g = self._flat(s_rc), self._flat(g_rc)
         if s == g:
             pts = np.array([[start.x, start.y], [goal.x, goal.y]])
@@ -263,6 +266,8 @@ class GridPlanner:
         return bool(labels[s] == labels[g] and labels[s] != 0)
 
     def _goal_within_tolerance(self, g_rc):
+        """NavFn's tolerance: the nearest free cell in the square of half-side ``tolerance``
+        around the goal (None if there is none, or the tolerance is 0)."""
         tol = self.params.tolerance
         if tol <= 0:
             return None
@@ -274,7 +279,7 @@ class GridPlanner:
             for dc in range(-n, n + 1):
                 d = math.hypot(dr, dc) * cm.resolution
                 r, c = r0 + dr, c0 + dc
-                if d > tol or d >= best_d or not (0 <= r < self.H and 0 <= c < self.W):
+                if d >= best_d or not (0 <= r < self.H and 0 <= c < self.W):
                     continue
                 if not self._blocked(int(cm.cost[r, c])):
                     best, best_d = (r, c), d

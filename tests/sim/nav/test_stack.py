@@ -160,7 +160,7 @@ def test_a_new_goal_preempts_the_running_one():
 def test_phantom_obstacle_until_costmaps_are_cleared():
     async def main():
         async with rig() as (_bus, robot, nav):
-            nav.inject_phantom_obstacle(GOAL.x, GOAL.y, 0.3)
+            nav.inject_phantom_obstacle(GOAL.x, GOAL.y, 0.7)  # beyond the planner's 0.5 m tolerance
             res = await nav.navigate_to_pose(GOAL)
             assert res.error_code is E.GOAL_OCCUPIED
             nav.inject_phantom_obstacle(4.0, 3.0, 0.5)  # and the door
