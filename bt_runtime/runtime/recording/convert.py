@@ -191,14 +191,14 @@ def command(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 # -- the autonomy layer -------------------------------------------------------------------------
 
 def tree_log(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    """m: [(t, uid, node_name, previous, current)] of one tick, as Nav2's RosTopicLogger sends."""
+    """m: [(t, node, previous, current)] of one tick, as Nav2's RosTopicLogger sends them."""
     stamps: dict[float, Any] = {}
     events = []
-    for et, uid, name, prev, cur in m:
+    for et, node, prev, cur in m:
         when = stamps.get(et)
         if when is None:
             when = stamps[et] = stamp(et)
-        events.append(BehaviorTreeStatusChange(when, name, uid & 0xFFFF, prev, cur))
+        events.append(BehaviorTreeStatusChange(when, node.name, node.config.uid & 0xFFFF, prev.name, cur.name))
     return [(topic, "nav2_msgs/msg/BehaviorTreeLog", BehaviorTreeLog(timestamp=stamp(t), event_log=events))]
 
 

@@ -43,9 +43,8 @@ class Recorder:
         self.clock = runtime.clock
         self._unsubscribe: list[Callable[[], None]] = []
         self._task: asyncio.Task | None = None
-        self._tree_events: list[tuple[float, int, str, str, str]] = []
-        self._tree_keys: list[tuple[int, str, str]] = []
-        self._last_tick_keys: list[tuple[int, str, str]] | None = None
+        self._tree_events: list[tuple[float, Any, Any, Any]] = []
+        self._last_tick_keys: list[tuple[Any, Any, Any]] | None = None
         self.repeated_ticks = 0  # ticks not logged because they repeated the previous one
         self._last_output: tuple[Any, str] | None = None
         self._last_output_t = -1e18
@@ -149,9 +148,7 @@ class Recorder:
             self.pipeline.put("supervisor_event", self.options.topics.supervisor_events, event.t, event)
 
     def _on_status(self, stamp: float, node: Any, previous: Any, new: Any) -> None:
-        uid = node.config.uid
-        self._tree_events.append((stamp, uid, node.name, previous.name, new.name))
-        self._tree_keys.append((uid, previous, new))
+        self._tree_events.append((stamp, node, previous, new))  # names are looked up off the loop
 
     def _on_tick(self, _status: Any) -> None:
         if self.pipeline.tick_guard is None and self.runtime.realtime:
@@ -161,14 +158,16 @@ class Recorder:
             self._flush_tree_log()
 
     def _flush_tree_log(self) -> None:
-        events, keys = self._tree_events, self._tree_keys
+        events = self._tree_events
         if not events:
             return
-        self._tree_events, self._tree_keys = [], []
-        if self.options.tree_log == "changes" and keys == self._last_tick_keys:
-            self.repeated_ticks += 1
-            return
-        self._last_tick_keys = keys
+        self._tree_events = []
+        if self.options.tree_log == "changes":
+            keys = [e[1:] for e in events]  # (node, previous, new): the same objects tick after tick
+            if keys == self._last_tick_keys:
+                self.repeated_ticks += 1
+                return
+            self._last_tick_keys = keys
         self.pipeline.put("tree_log", self.options.topics.behavior_tree_log, self.clock(), events)
 
     # -- periodic (robot time) ---------------------------------------------------------------------
