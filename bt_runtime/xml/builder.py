@@ -34,6 +34,7 @@ from ..ports import (
 from ..status import PortDirection
 from ..timers import TimerQueue, WakeUpSignal
 from ..tree import SubtreeRecord, Tree
+from .depth import check_tree_depth
 from .document import EXPLICIT_TAG_SET, TreeDefinition, suggest
 from .reader import ELEMENT, XMLDocument
 
@@ -87,6 +88,7 @@ class TreeBuilder:
         if definition is None:
             raise XMLLoadError(f"Can't find a tree with name: {tree_id}"
                                f"{suggest(tree_id, list(self.registry.trees))}")
+        check_tree_depth(self.registry, tree_id)  # before recursing into it
         record = SubtreeRecord(tree_id, "", blackboard if blackboard is not None else Blackboard())
         self._records.append(record)
         self._build_node(definition.root_element, definition.document, record, "", [tree_id])
