@@ -18,6 +18,7 @@ from .spec import (
     AlternativeReached,
     ComponentReset,
     GoalRefused,
+    HitOnce,
     ObstacleInMap,
     OutOfContact,
     ReachGoal,
@@ -145,9 +146,29 @@ def obstacle_in_map(rec: RunRecord, c: ObstacleInMap) -> Verdict:
     return Verdict(name, False, f"not in the map ({len(marks)} mark(s) elsewhere)" if marks else "not in the map")
 
 
+def hit_once(rec: RunRecord, c: HitOnce) -> Verdict:
+    """From the simulator's collision events (true contacts, for judging only)."""
+    name = f"hit_once({c.obstacle})"
+
+    def ours(e) -> bool:
+        key = str(e.data.get("obstacle", ""))
+        return key == c.obstacle or key.endswith(":" + c.obstacle)
+
+    hits, last_end = [], None
+    for e in rec.sim_events:
+        if e.kind == "collision" and ours(e):
+            if not hits or last_end is None or e.t - last_end > c.merge:
+                hits.append(e.t)
+        elif e.kind == "collision_end" and ours(e):
+            last_end = e.t
+    if len(hits) <= 1:
+        return Verdict(name, True, f"hit {len(hits)}x" + (f" (at {hits[0]:.2f} s)" if hits else ""))
+    return Verdict(name, False, f"hit {len(hits)}x, at " + ", ".join(f"{t:.2f}" for t in hits) + " s")
+
+
 JUDGES = {"component_reset": component_reset, "reach_goal": reach_goal, "goal_refused": goal_refused,
           "alternative_reached": alternative_reached, "out_of_contact": out_of_contact,
-          "obstacle_in_map": obstacle_in_map}
+          "obstacle_in_map": obstacle_in_map, "hit_once": hit_once}
 
 
 def judge(spec: ScenarioSpec, rec: RunRecord) -> list[Verdict]:

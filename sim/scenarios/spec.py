@@ -116,8 +116,17 @@ class ObstacleInMap(_Model):
     within: float = Field(0.3, description="m between the mark and the obstacle")
 
 
-Criterion = Annotated[ComponentReset | ReachGoal | GoalRefused | AlternativeReached | OutOfContact | ObstacleInMap,
-                      Field(discriminator="kind")]
+class HitOnce(_Model):
+    """The robot never hits the same obstacle twice (contacts closer together than ``merge``
+    seconds are one hit: a bounce, not a second run into it)."""
+
+    kind: Literal["hit_once"]
+    obstacle: str = Field(description="name of the obstacle a fault created")
+    merge: float = Field(0.5, ge=0, description="s between contacts that still count as one hit")
+
+
+Criterion = Annotated[ComponentReset | ReachGoal | GoalRefused | AlternativeReached | OutOfContact | ObstacleInMap
+                      | HitOnce, Field(discriminator="kind")]
 
 
 class Speeds(_Model):

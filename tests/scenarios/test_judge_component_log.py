@@ -61,3 +61,23 @@ def test_the_simulator_logs_sensor_and_navigation_restarts_with_their_first_mess
     log = driver.sim.component_log
     for name, fault in (("lidar", "crashed"), ("planner_server", "failing")):
         assert [e.event for e in log if e.component == name] == [fault, "restarting", "running", "published"]
+
+
+def test_hit_once_counts_runs_into_an_obstacle_not_bounces():
+    from sim.scenarios.judge import hit_once
+    from sim.scenarios.spec import HitOnce
+    from sim.simulator import SimEvent
+
+    def rec(times):
+        events = []
+        for start, end in times:
+            events += [SimEvent(start, "collision", {"obstacle": "dyn:box"}),
+                       SimEvent(end, "collision_end", {"obstacle": "dyn:box"})]
+        r = _record([])
+        r.sim_events = events
+        return r
+
+    c = HitOnce(kind="hit_once", obstacle="box")
+    assert hit_once(rec([(2.0, 2.1), (2.2, 3.0)]), c).passed  # a bounce: one hit
+    v = hit_once(rec([(2.0, 3.0), (9.0, 9.5)]), c)
+    assert not v.passed and "hit 2x" in v.reason
