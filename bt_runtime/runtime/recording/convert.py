@@ -83,9 +83,31 @@ def twist(linear: float, angular: float) -> Any:
 
 @dataclass
 class ConvertState:
+    """Conversion state of one writer thread. The hot types (imu, odometry, tf, twist) reuse one
+    message object each, filled in place: the message is serialized before the next conversion,
+    and building nested message objects costs as much as serializing them."""
+
     frames: Frames = field(default_factory=Frames)
     tf_topic: str = "/tf"
     odom_pose: tuple[float, float, float] | None = None  # last odom -> base_link
+    templates: dict[str, Any] = field(default_factory=dict)
+    sizes: dict[int, int | None] = field(default_factory=dict)  # id(template) -> CDR size, once known
+
+    def template(self, key: str, make: Callable[[], Any]) -> Any:
+        msg = self.templates.get(key)
+        if msg is None:
+            msg = self.templates[key] = make()
+            self.sizes[id(msg)] = None
+        return msg
+
+
+def _set_stamp(time_msg: Any, t: float) -> None:
+    time_msg.sec, time_msg.nanosec = divmod(int(round(t * 1e9)), 1_000_000_000)
+
+
+def _set_pose(p: Any, x: float, y: float, yaw: float) -> None:
+    p.position.x, p.position.y = float(x), float(y)
+    p.orientation.z, p.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
 
 
 # -- sensors ------------------------------------------------------------------------------------
@@ -102,15 +124,40 @@ def scan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     return [(topic, "sensor_msgs/msg/LaserScan", msg)]
 
 
+def _odometry(frame: str, child: str) -> Any:
+    return Odometry(header=Header(stamp=Time(0, 0), frame_id=frame), child_frame_id=child,
+                    pose=PoseWithCovariance(pose=pose(0.0, 0.0, 0.0), covariance=COV36),
+                    twist=TwistWithCovariance(twist=twist(0.0, 0.0), covariance=COV36))
+
+
+def _fill_odometry(msg: Any, m: Any) -> Any:
+    p = m.pose
+    _set_stamp(msg.header.stamp, m.stamp)
+    _set_pose(msg.pose.pose, p.x, p.y, p.yaw)
+    tw = msg.twist.twist
+    tw.linear.x, tw.angular.z = float(m.twist.linear), float(m.twist.angular)
+    return msg
+
+
+def _tf_template(parent: str, child: str) -> Any:
+    return TFMessage(transforms=[transform(0.0, parent, child, 0.0, 0.0, 0.0)])
+
+
+def _fill_tf(msg: Any, t: float, x: float, y: float, yaw: float) -> Any:
+    tf = msg.transforms[0]
+    _set_stamp(tf.header.stamp, t)
+    tr = tf.transform
+    tr.translation.x, tr.translation.y = float(x), float(y)
+    tr.rotation.z, tr.rotation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+    return msg
+
+
 def odom(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
     p = m.pose
     s.odom_pose = (p.x, p.y, p.yaw)
-    when = stamp(m.stamp)
-    msg = Odometry(header=Header(stamp=when, frame_id=f.odom), child_frame_id=f.base,
-                   pose=PoseWithCovariance(pose=pose(p.x, p.y, p.yaw), covariance=COV36),
-                   twist=TwistWithCovariance(twist=twist(m.twist.linear, m.twist.angular), covariance=COV36))
-    tf = TFMessage(transforms=[transform(when, f.odom, f.base, p.x, p.y, p.yaw)])
+    msg = _fill_odometry(s.template("odom", lambda: _odometry(f.odom, f.base)), m)
+    tf = _fill_tf(s.template("tf_odom", lambda: _tf_template(f.odom, f.base)), m.stamp, p.x, p.y, p.yaw)
     return [(topic, "nav_msgs/msg/Odometry", msg), (s.tf_topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
@@ -124,16 +171,23 @@ def localized(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     c, sn = math.cos(yaw), math.sin(yaw)
     x = p.x - (c * ox - sn * oy)
     y = p.y - (sn * ox + c * oy)
-    tf = TFMessage(transforms=[transform(m.stamp, s.frames.map, s.frames.odom, x, y, yaw)])
+    f = s.frames
+    tf = _fill_tf(s.template("tf_map", lambda: _tf_template(f.map, f.odom)), m.stamp, x, y, yaw)
     return [(topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
+def _imu(frame: str) -> Any:
+    return Imu(header=Header(stamp=Time(0, 0), frame_id=frame), orientation=quat(0.0), orientation_covariance=COV9,
+               angular_velocity=Vector3(x=0.0, y=0.0, z=0.0), angular_velocity_covariance=COV9,
+               linear_acceleration=Vector3(x=0.0, y=0.0, z=0.0), linear_acceleration_covariance=COV9)
+
+
 def imu(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    msg = Imu(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.imu), orientation=quat(m.yaw),
-              orientation_covariance=COV9, angular_velocity=Vector3(x=0.0, y=0.0, z=float(m.yaw_rate)),
-              angular_velocity_covariance=COV9,
-              linear_acceleration=Vector3(x=float(m.accel_x), y=float(m.accel_y), z=0.0),
-              linear_acceleration_covariance=COV9)
+    msg = s.template("imu", lambda: _imu(s.frames.imu))
+    _set_stamp(msg.header.stamp, m.stamp)
+    msg.orientation.z, msg.orientation.w = math.sin(m.yaw / 2.0), math.cos(m.yaw / 2.0)
+    msg.angular_velocity.z = float(m.yaw_rate)
+    msg.linear_acceleration.x, msg.linear_acceleration.y = float(m.accel_x), float(m.accel_y)
     return [(topic, "sensor_msgs/msg/Imu", msg)]
 
 
@@ -185,7 +239,9 @@ def tf_static(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 # -- commands -----------------------------------------------------------------------------------
 
 def command(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    return [(topic, "geometry_msgs/msg/Twist", twist(m.linear, m.angular))]
+    msg = s.template("twist", lambda: twist(0.0, 0.0))
+    msg.linear.x, msg.angular.z = float(m.linear), float(m.angular)
+    return [(topic, "geometry_msgs/msg/Twist", msg)]
 
 
 # -- the autonomy layer -------------------------------------------------------------------------
@@ -237,10 +293,8 @@ def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
 # -- hook kinds ---------------------------------------------------------------------------------
 
 def odometry_like(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    p = m.pose
-    msg = Odometry(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.map), child_frame_id=s.frames.base,
-                   pose=PoseWithCovariance(pose=pose(p.x, p.y, p.yaw), covariance=COV36),
-                   twist=TwistWithCovariance(twist=twist(m.twist.linear, m.twist.angular), covariance=COV36))
+    f = s.frames
+    msg = _fill_odometry(s.template("odometry:" + topic, lambda: _odometry(f.map, f.base)), m)
     return [(topic, "nav_msgs/msg/Odometry", msg)]
 
 

@@ -142,7 +142,13 @@ class RecordPipeline:
                     channel = self.channels.add(name, typename, latched=latched)
                 if not channel.has_sinks() and name not in self.channels.latched:
                     continue  # live view only, and nobody subscribed to this topic
-                data = serialize(msg, typename)
+                sizes = self.state.sizes
+                key = id(msg)
+                if key in sizes:  # a reused message: its size never changes
+                    data = serialize(msg, typename, sizes[key])
+                    sizes[key] = len(data)
+                else:
+                    data = serialize(msg, typename)
                 t_ns = max(0, int(round(t * 1e9)))
                 if bag is not None:
                     bag.count(name, t_ns)

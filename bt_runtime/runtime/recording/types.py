@@ -50,8 +50,20 @@ def type_hash(typename: str) -> str:
     return typestore().hash_rihs01(typename)
 
 
-def serialize(message: Any, typename: str) -> bytes:
-    return bytes(typestore().serialize_cdr(message, typename))
+def serialize(message: Any, typename: str, size: int | None = None) -> bytes:
+    """CDR (little endian) with rosbags' generated serializer. ``size``: the encoded size when
+    the caller knows it (a reused message whose strings and sequences never change length), which
+    saves rosbags' sizing pass."""
+    store = typestore()
+    msgdef = store.get_msgdef(typename)
+    if size is None:
+        size = 4 + msgdef.getsize_cdr(0, message, store)
+    buffer = bytearray(size)
+    buffer[1] = 1  # encapsulation: CDR little endian
+    end = msgdef.serialize_cdr_le(memoryview(buffer)[4:], 0, message, store)
+    if end + 4 != size:
+        raise ValueError(f"{typename}: encoded {end + 4} bytes, expected {size}")
+    return bytes(buffer)
 
 
 def msg_class(typename: str) -> type:
