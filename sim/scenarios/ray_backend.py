@@ -51,7 +51,12 @@ class RayBackend:
             kwargs.update(num_cpus=num_cpus or os.cpu_count() or 1, _node_ip_address="127.0.0.1")
         self._owner = not ray.is_initialized()  # else: this process already runs Ray (a notebook, a test)
         if self._owner:
-            ray.init(address=address, **kwargs)
+            try:
+                ray.init(address=address, **kwargs)
+            except ConnectionError as exc:
+                raise RuntimeError(f"--ray-address {address}: cannot reach the Ray cluster ({exc}); is "
+                                   f"'ray start --head' running there, and does this machine hold its token "
+                                   f"(docs/cluster.md)?") from None
         self.cpus = int(ray.cluster_resources().get("CPU", 0)) or 1
         self._task = ray.remote(execute_run).options(num_cpus=1, max_retries=MAX_RETRIES)
 
