@@ -309,6 +309,14 @@ class NavStack:
         return asyncio.get_running_loop().time()
 
     @staticmethod
+    def _sim_time() -> float | None:
+        """Loop time for log lines (rounded like the runtime's), None outside a loop."""
+        try:
+            return round(asyncio.get_running_loop().time(), 3)
+        except RuntimeError:
+            return None
+
+    @staticmethod
     def _receipt_time(stamp: float) -> float:
         """When a message arrived: the loop's clock, or its stamp outside a running loop."""
         try:
@@ -406,7 +414,7 @@ class NavStack:
             task.cancel()
         comp.changed()
         self._log_component(name, "crashed")
-        log.warning("nav_component_crashed", component=name)
+        log.warning("nav_component_crashed", component=name, sim_time=self._sim_time())
 
     def hang(self, name: str) -> None:
         """The process stops answering: requests are accepted but never served, no heartbeats."""
@@ -414,14 +422,14 @@ class NavStack:
         comp.hung = True
         comp.changed()
         self._log_component(name, "hung")
-        log.warning("nav_component_hung", component=name)
+        log.warning("nav_component_hung", component=name, sim_time=self._sim_time())
 
     def fail_until_restart(self, name: str) -> None:
         """Every request fails (planner: NO_VALID_PATH, controller: NO_VALID_CONTROL,
         behaviours: BEHAVIOR_UNKNOWN) until the component is restarted."""
         self._comp(name).failing = True
         self._log_component(name, "failing")
-        log.warning("nav_component_failing", component=name)
+        log.warning("nav_component_failing", component=name, sim_time=self._sim_time())
 
     async def restart(self, name: str, delay: float | None = None) -> bool:
         """Restart a component; True once it is ACTIVE again (False if it crashed meanwhile)."""
@@ -433,7 +441,7 @@ class NavStack:
         comp.hung = comp.failing = False
         comp.changed()
         self._log_component(name, "restarting")
-        log.info("nav_component_restarting", component=name, delay=delay)
+        log.info("nav_component_restarting", component=name, delay=delay, sim_time=self._sim_time())
         await asyncio.sleep(max(delay, 0.0))
         if comp.generation != gen:
             return False
@@ -441,7 +449,7 @@ class NavStack:
         comp.announce = True  # its first heartbeat goes in the component log
         comp.changed()
         self._log_component(name, "running")
-        log.info("nav_component_active", component=name)
+        log.info("nav_component_active", component=name, sim_time=self._sim_time())
         return True
 
     def restart_in_background(self, name: str, delay: float | None = None) -> asyncio.Task:
@@ -503,14 +511,14 @@ class NavStack:
         self._handles.discard(handle)
         if not task.cancelled() and task.exception() is not None:
             exc = task.exception()
-            log.error("nav_action_failed", action=handle.kind, error=repr(exc),
+            log.error("nav_action_failed", action=handle.kind, error=repr(exc), sim_time=self._sim_time(),
                       exc_info=(type(exc), exc, exc.__traceback__))
             if self._motion is handle:
                 self._publish(ZERO_TWIST)  # never leave a stale command behind an internal error
         elif not task.cancelled():
             res = task.result()
             log.debug("nav_action_done", action=handle.kind, status=res.status.value,
-                      code=res.error_code.name, msg=res.error_msg)
+                      code=res.error_code.name, msg=res.error_msg, sim_time=self._sim_time())
 
     def navigate_to_pose(self, goal: Pose2D, *, behavior_tree: str = "",
                          feedback: Callable[[NavFeedback], None] | None = None) -> NavHandle:
@@ -595,13 +603,13 @@ class NavStack:
             await self._service(CONTROLLER)
             self.local_costmap.clear()
             self._local_seq = self._scan_seq
-        log.info("nav_costmaps_cleared", which=which)
+        log.info("nav_costmaps_cleared", which=which, sim_time=self._sim_time())
 
     async def add_obstacle(self, x: float, y: float, radius: float = 0.1) -> None:
         self.global_costmap.add_obstacle(x, y, radius)
         if self.local_costmap._placed:
             self.local_costmap.recompose()
-        log.info("nav_obstacle_added", x=x, y=y, radius=radius)
+        log.info("nav_obstacle_added", x=x, y=y, radius=radius, sim_time=self._sim_time())
 
     def is_path_valid(self, path: Path, max_cost: int = 253) -> bool:
         if not self.components[PLANNER].alive:
@@ -648,7 +656,7 @@ class NavStack:
         self._update_global(self._now())
         res = self.planner.plan(start, goal)
         if not res.ok:
-            log.info("nav_plan_failed", code=res.error_code.name, msg=res.message)
+            log.info("nav_plan_failed", code=res.error_code.name, msg=res.message, sim_time=self._sim_time())
         return res
 
     # ------------------------------------------------------------------------------------
