@@ -122,6 +122,16 @@ def load_config(path: Path | None):
         raise UsageError(str(exc)) from None
 
 
+def _robot_has_bumper(robot: str) -> bool:
+    """Does the robot profile named on the command line have a bumper? (True if unknown.)"""
+    try:
+        from sim.robot import load_profile
+
+        return load_profile(robot).bumper is not None
+    except Exception:  # a profile we cannot read: keep the configured components
+        return True
+
+
 def make_driver(args: argparse.Namespace):
     if args.driver == "ros2":
         try:
@@ -135,6 +145,8 @@ def make_driver(args: argparse.Namespace):
             raise UsageError(str(exc)) from None
         if getattr(args, "loopback", False):
             config.loopback_only = True
+        if not _robot_has_bumper(args.robot):
+            config = config.without_components("bumper")  # e.g. the ROSbot 2.0 senses contacts by IMU
         return Ros2Driver(config.with_environment())
     from sim.driver import SimDriver
 

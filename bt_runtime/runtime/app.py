@@ -31,6 +31,7 @@ from .clock import is_virtual
 from .command_limits import MotionLimits
 from .config import RuntimeConfig
 from .context import RuntimeContext
+from .diagnostics import DiagnosticsPublisher
 from .driver import RobotDriver
 from .gate import DecisionGate
 from .goal_intake import GoalHandle, GoalIntake
@@ -101,6 +102,8 @@ class AutonomyRuntime:
         self.completed: asyncio.Future = self.loop.create_future()
         self._tick_task: asyncio.Task | None = None
         self._service_tasks: list[asyncio.Task] = []
+        self.diagnostics: DiagnosticsPublisher | None = None
+        self._diagnostics_task: asyncio.Task | None = None
         self._started_wall = 0.0
         self._started_sim = 0.0
         self._grid_origin = 0.0
@@ -182,6 +185,10 @@ class AutonomyRuntime:
                                spawn(self.gate.run(), name="gate")]
         for task in self._service_tasks:
             task.add_done_callback(self._watch_service)
+        publish = getattr(self.driver, "publish_diagnostics", None)
+        if publish is not None:  # health on /diagnostics where the driver speaks ROS (not safety-critical)
+            self.diagnostics = DiagnosticsPublisher(self.supervisor, publish, self.clock)
+            self._diagnostics_task = spawn(self.diagnostics.run(), name="diagnostics")
         self.running = True
         register_live(self)
         if self.watchdog is not None:
@@ -254,8 +261,10 @@ class AutonomyRuntime:
         self.running = False
         timeout = self.config.shutdown_timeout
         self.gate.shutdown()  # zero first: nothing below may delay it
-        await settle([t for t in (self._tick_task, *self._service_tasks) if t is not None], timeout,
-                     what="runtime stop")
+        if self.diagnostics is not None:
+            self.diagnostics.close()
+        await settle([t for t in (self._tick_task, *self._service_tasks, self._diagnostics_task) if t is not None],
+                     timeout, what="runtime stop")
         if self.tree is not None:
             node_tasks = [t for t in asyncio.all_tasks(self.loop) if t.get_name().startswith("bt:")]
             self._halt_tree_logged()

@@ -57,6 +57,8 @@ class Topics(_Model):
     battery: TopicConfig | None = Field(default_factory=lambda: TopicConfig(name="battery_state"))
     bumper: BumperConfig | None = Field(default_factory=lambda: BumperConfig(name="bumper"))
     cmd_vel: CmdVelConfig = Field(default_factory=CmdVelConfig)
+    diagnostics: str | None = Field("/diagnostics", description="diagnostic_msgs/DiagnosticArray: component "
+                                    "health from the supervisor at 1 Hz and on every change (None = off)")
     nav_cmd_vel: NavCmdVelConfig | None = Field(
         default_factory=lambda: NavCmdVelConfig(name="cmd_vel_nav"),
         description="where Nav2's last velocity stage publishes (remapped away from cmd_vel)")
@@ -180,6 +182,16 @@ class Ros2Config(_Model):
         if "domain_id" not in self.model_fields_set and env.isdigit():
             self.domain_id = int(env)
         return self
+
+    def without_components(self, *names: str) -> Ros2Config:
+        """A copy that neither reads nor watches the named components: a robot without a bumper
+        (the ROSbot 2.0 senses collisions with its IMU) must not wait for one."""
+        copy = self.model_copy(deep=True)
+        for name in names:
+            copy.components.pop(name, None)
+            if name == "bumper":
+                copy.topics.bumper = None
+        return copy
 
     @classmethod
     def load(cls, path: str | Path) -> Ros2Config:

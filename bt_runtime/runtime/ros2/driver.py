@@ -74,6 +74,7 @@ class Ros2Driver:
         self._restarting: set[str] = set()
         self._poller: asyncio.Task | None = None
         self.sent = 0
+        self._diagnostics_writer: Any = None
         self.send_errors = 0
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -209,6 +210,19 @@ class Ros2Driver:
         if self._write_cmd(linear, angular):
             for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
                 callback(Twist(float(linear), float(angular)))
+
+    def publish_diagnostics(self, diagnostics: list, now: float) -> None:
+        """Component health (``runtime.diagnostics.ComponentDiagnostic``) on the diagnostics topic."""
+        topic = self.config.topics.diagnostics
+        if topic is None or self.node is None:
+            return
+        if self._diagnostics_writer is None:
+            self._diagnostics_writer = self.node.publisher(topic, idl.DiagnosticArray, dds.DEFAULT)
+        msg = idl.DiagnosticArray(header=idl.Header(stamp=idl.Time.now(), frame_id=""), status=[
+            idl.DiagnosticStatus(level=d.level, name=d.name, message=d.message, hardware_id=d.hardware_id,
+                                 values=[idl.KeyValue(key=k, value=v) for k, v in d.values])
+            for d in diagnostics])
+        self._diagnostics_writer.write(msg)
 
     def emergency_zero(self) -> None:
         """Write a zero ``cmd_vel`` from any thread (Cyclone's writers are thread-safe); the

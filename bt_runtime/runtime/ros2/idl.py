@@ -41,8 +41,8 @@ from cyclonedds.idl.types import (
 
 __all__ = [
     "ActionTypes", "BackUp", "BatteryState", "Bool", "ChangeState_Request", "ChangeState_Response",
-    "ComputePathToPose", "DriveOnHeading", "Duration", "Empty", "FollowPath", "GetState_Request",
-    "GetState_Response", "GoalInfo", "GoalStatus", "GoalStatusArray", "Header", "Imu",
+    "ComputePathToPose", "DiagnosticArray", "DiagnosticStatus", "DriveOnHeading", "Duration", "Empty", "FollowPath", "GetState_Request",
+    "GetState_Response", "GoalInfo", "KeyValue", "GoalStatus", "GoalStatusArray", "Header", "Imu",
     "LaserScan", "MapMetaData", "NavigateToPose", "OccupancyGrid", "String", "Odometry", "Path", "Point", "Pose", "PoseStamped",
     "PoseWithCovariance", "PoseWithCovarianceStamped", "Quaternion", "Spin", "SpeedLimit", "State", "Time",
     "Transition", "Twist", "TwistStamped", "TwistWithCovariance", "UUID", "Vector3",
@@ -278,6 +278,35 @@ class OccupancyGrid(IdlStruct, typename="nav_msgs::msg::dds_::OccupancyGrid_"):
 @dataclass
 class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
     data: str = ""
+
+
+# --------------------------------------------------------------------------------------------
+# diagnostic_msgs
+# --------------------------------------------------------------------------------------------
+
+@dataclass
+class KeyValue(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
+    key: str = ""
+    value: str = ""
+
+
+@dataclass
+class DiagnosticStatus(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticStatus_"):
+    OK = 0
+    WARN = 1
+    ERROR = 2
+    STALE = 3
+    level: int8 = 0  # rosidl "byte" (one octet on the wire; levels are 0..3, and rosbags reads it signed)
+    name: str = ""
+    message: str = ""
+    hardware_id: str = ""
+    values: sequence[KeyValue] = _list()
+
+
+@dataclass
+class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::DiagnosticArray_"):
+    header: Header = _of(Header)
+    status: sequence[DiagnosticStatus] = _list()
 
 
 # --------------------------------------------------------------------------------------------
