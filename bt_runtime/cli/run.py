@@ -145,7 +145,7 @@ def make_driver(args: argparse.Namespace):
             raise UsageError(str(exc)) from None
         if getattr(args, "loopback", False):
             config.loopback_only = True
-        if not _robot_has_bumper(args.robot):
+        if not _robot_has_bumper(getattr(args, "robot", "burger")):
             config = config.without_components("bumper")  # e.g. the ROSbot 2.0 senses contacts by IMU
         return Ros2Driver(config.with_environment())
     from sim.driver import SimDriver
