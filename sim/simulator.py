@@ -25,6 +25,7 @@ import asyncio
 import contextlib
 import math
 import zlib
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -82,6 +83,8 @@ class SimOptions(BaseModel):
     physics_hz: float = Field(100.0, gt=0)
     substeps: int = Field(1, ge=1, le=50)  # minimum; more when fast (<= 4 mm travel per substep)
     trajectory_hz: float = Field(10.0, gt=0)  # ground-truth recording and the ground_truth topic
+    trajectory_keep: int = Field(100_000, ge=1)  # samples kept (the latest; ~2.8 h at 10 Hz, ~10 MB): a
+    # sim-robot may run for days
     max_body_speed: float = Field(3.0, gt=0)  # m/s cap on the body (anti-tunnelling)
     restart_delay: float = Field(1.0, ge=0)  # default for every component
     restart_delays: dict[str, float] = Field(default_factory=dict)  # per component
@@ -156,7 +159,7 @@ class Simulator:
         self.t0 = 0.0
         self.step_count = 0
         self._prev_v = (0.0, 0.0)
-        self._traj: list[tuple] = []
+        self._traj: deque[tuple] = deque(maxlen=options.trajectory_keep)
         self._traj_steps = max(1, int(round(self.physics_hz / options.trajectory_hz)))
         self._touching: dict[str, tuple[float, float]] = {}
         self._synthetic: list[tuple[float, float]] = []  # (until, bearing) of pushes
@@ -388,7 +391,8 @@ class Simulator:
         return Twist(phys.vx * math.cos(yaw) + phys.vy * math.sin(yaw), phys.wz)
 
     def trajectory(self) -> np.ndarray:
-        """Ground truth recorded at ``trajectory_hz``: columns t, x, y, yaw, v, w, in_contact."""
+        """Ground truth recorded at ``trajectory_hz`` (the latest ``trajectory_keep`` samples):
+        columns t, x, y, yaw, v, w, in_contact."""
         return np.array(self._traj, dtype=float).reshape(-1, 7)
 
     def apply_impulse(self, ix: float, iy: float, point: tuple[float, float] | None = None) -> None:
