@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .server import DEFAULT_PORT
@@ -41,6 +42,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="record every status change to a .btlog file Groot2 can replay")
 
 
+class MonitoringError(ValueError):
+    """A bad --btlog path or a Groot2 port that cannot be bound (reported without a traceback)."""
+
+
+def check_btlog_path(path: str) -> None:
+    target = Path(path)
+    if target.suffix != ".btlog":
+        raise MonitoringError(f"--btlog {path}: the file name must end in .btlog (Groot2 replays only those)")
+    if not target.parent.is_dir():
+        raise MonitoringError(f"--btlog {path}: folder {target.parent} does not exist")
+    if target.exists() and not target.is_file():
+        raise MonitoringError(f"--btlog {path}: exists and is not a regular file")
+
+
 @dataclass
 class Monitoring:
     """The Groot2 server and/or .btlog logger of one tree."""
@@ -63,14 +78,21 @@ class Monitoring:
         from .server import GrootServer
 
         if self.btlog and self.logger is None:
-            self.logger = BTLogger(self.tree, self.btlog)
+            check_btlog_path(self.btlog)
+            try:
+                self.logger = BTLogger(self.tree, self.btlog)
+            except OSError as exc:
+                raise MonitoringError(f"--btlog {self.btlog}: {exc.strerror or exc}") from None
         if self.port is not None and self.server is None:
             self.server = GrootServer(self.tree, port=self.port, host=self.host, status_mode=self.status_mode)
             try:
                 await self.server.start()
-            except BaseException:
+            except BaseException as exc:
                 self.server = None
                 await self.stop()
+                if isinstance(exc, OSError):  # a port in use (or a host we cannot bind)
+                    raise MonitoringError(f"--groot {self.port}: {exc} (is another run or Groot2 "
+                                          "server using it? pick another port)") from None
                 raise
         return self
 

@@ -30,7 +30,7 @@ class ProfileError(ValueError):
 
 
 class _Spec(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)  # .inf/.nan: a clear error, not a runaway
 
 
 class LidarSpec(_Spec):

@@ -55,7 +55,7 @@ class WorldError(ValueError):
 
 
 class PoseSpec(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
     x: float
     y: float
     yaw: float = 0.0
@@ -65,7 +65,7 @@ class PoseSpec(BaseModel):
 
 
 class _Obstacle(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
     name: str = ""
     blocks_lidar: bool = True
     blocks_body: bool = True
@@ -176,8 +176,11 @@ Obstacle = Annotated[PolygonObstacle | SegmentObstacle | CircleObstacle, Field(d
 OBSTACLE_TYPES = ("polygon", "segment", "circle")
 
 
+MAX_WORLD_SIDE = 200.0  # m: a 0.05 m map of 200 x 200 m is 16 M cells
+
+
 class Bounds(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
     xmin: float
     ymin: float
     xmax: float
@@ -187,6 +190,11 @@ class Bounds(BaseModel):
     def _order(self) -> Bounds:
         if not (self.xmin < self.xmax and self.ymin < self.ymax):
             raise ValueError("bounds need xmin < xmax and ymin < ymax")
+        width, height = self.xmax - self.xmin, self.ymax - self.ymin
+        if width > MAX_WORLD_SIDE or height > MAX_WORLD_SIDE:  # maps, costmaps and rasters cover the bounds
+            cells = (width / 0.05) * (height / 0.05)
+            raise ValueError(f"bounds of {width:g} x {height:g} m would need about {cells * 5 / 1e9:.1f} GB "
+                             f"of maps at 0.05 m; at most {MAX_WORLD_SIDE:g} m a side")
         return self
 
     def contains(self, x: float, y: float) -> bool:
@@ -204,7 +212,7 @@ class Bounds(BaseModel):
 class World(BaseModel):
     """A static world. Obstacles added at run time (faults) live in the Simulator, not here."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     name: str
     description: str = ""
     source: str = ""

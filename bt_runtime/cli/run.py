@@ -49,7 +49,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--ready-timeout", type=float, default=10.0, metavar="S",
                    help="wait up to S s (robot time) for every component to report before the tree "
                         "starts and gets its goals (default 10)")
-    p.add_argument("--duration", type=float, default=None, metavar="S",
+    p.add_argument("--duration", type=positive_seconds, default=None, metavar="S",
                    help="stop after S seconds of robot time (default: when the tree completes)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--realtime", action="store_true", help="pace the simulation to the wall clock")
@@ -81,6 +81,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 # ---------------------------------------------------------------------------------------------
 # argument checking (clear errors, no tracebacks)
 # ---------------------------------------------------------------------------------------------
+
+def positive_seconds(text: str) -> float:
+    """argparse type for durations: a finite number > 0 (nan, inf and -5 are refused)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
 
 def parse_goal(text: str, world: Any = None) -> Pose2D:
     parts = [p.strip() for p in text.replace(";", ",").split(",") if p.strip()]
@@ -200,9 +211,12 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
         recording = start_recording(args, runtime, driver)
     except RecordingError as exc:
         raise UsageError(str(exc)) from None
-    from groot.cli import Monitoring
+    from groot.cli import Monitoring, MonitoringError
 
-    monitoring = await Monitoring.from_args(runtime.tree, args).start()
+    try:
+        monitoring = await Monitoring.from_args(runtime.tree, args).start()
+    except MonitoringError as exc:  # --btlog folder/extension, --groot port in use
+        raise UsageError(str(exc)) from None
     await runtime.start(tick=False)
     progress_task = asyncio.get_running_loop().create_task(progress.run()) if progress else None
     t0 = runtime.clock()

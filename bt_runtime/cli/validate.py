@@ -23,13 +23,12 @@ import sys
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass
-from pathlib import Path
 from typing import Any
 
 from ..errors import BehaviorTreeException, XMLLoadError
 from ..factory import BehaviorTreeFactory
 from ..ports import blackboard_key
-from ..xml.reader import element_children, parse_xml_text
+from ..xml.reader import element_children, parse_xml_text, read_limited
 from .registration import RegistrationError, add_registration_arguments, registrations
 
 
@@ -129,7 +128,12 @@ def _read_models(paths: list[str], report) -> list[tuple[str, str]] | None:
     models = []
     for path in paths:
         try:
-            text = Path(path).read_text(encoding="utf-8-sig")
+            try:
+                raw = read_limited(path)
+            except XMLLoadError as exc:
+                report(Problem(path, None, None, f"cannot read the models file: {exc.message}"))
+                return None
+            text = raw.decode("utf-8-sig")
             misuse = _not_a_models_file(text, path)
             if misuse is not None:
                 report(misuse)
@@ -185,11 +189,10 @@ def _factory(models: list[tuple[str, str]], registrations: Sequence[Callable[[An
 def validate_file(file: str, models: list[tuple[str, str]], report,
                   registrations: Sequence[Callable[[Any], Any]] = ()) -> int:
     """Check one file; report its problems; return how many trees were checked."""
-    path = Path(file)
     try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        report(Problem(file, None, None, f"cannot read the file: {exc.strerror or exc}"))
+        raw = read_limited(file)  # regular files only, at most the XML size limit
+    except XMLLoadError as exc:
+        report(Problem(file, None, None, exc.message[:1].lower() + exc.message[1:]))
         return 0
     try:
         text = raw.decode("utf-8-sig")

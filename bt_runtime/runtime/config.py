@@ -6,9 +6,11 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from .driver import STREAMS
+
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)  # deadman_timeout: .inf is an error
 
 
 class TickConfig(_Model):
@@ -59,6 +61,17 @@ class BackupConfig(_Model):
     sizes: dict[str, int] = Field(default_factory=lambda: {
         "scan": 50, "imu": 500, "odom": 500, "pose": 200, "bumper": 200, "battery": 120,
         "cmd_vel": 1000, "nav_cmd_vel": 500})
+
+    @field_validator("sizes")
+    @classmethod
+    def _known_positive_sizes(cls, sizes: dict[str, int]) -> dict[str, int]:
+        known = (*STREAMS, "cmd_vel")  # cmd_vel: what the gate sent
+        for stream, size in sizes.items():
+            if stream not in known:
+                raise ValueError(f"unknown stream {stream!r} (streams: {', '.join(known)})")
+            if not 1 <= size <= 1_000_000:
+                raise ValueError(f"{stream}: buffer size must be 1..1000000, got {size}")
+        return sizes
 
 
 class GateConfig(_Model):

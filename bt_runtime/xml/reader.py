@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import bisect
 import re
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -127,16 +128,27 @@ def _make_lenient(text: str) -> tuple[str, list[int], list[int]]:
     return _START_TAG.sub(fix_tag, text), starts, removed
 
 
-def read_xml_file(path: str | Path) -> XMLDocument:
+def read_limited(path: str | Path, limit: int = MAX_XML_BYTES) -> bytes:
+    """A regular file's bytes, at most ``limit`` of them: a FIFO, a device (``/dev/zero``) or a
+    directory is refused before reading, and so is a file that turns out longer than ``limit``."""
     p = Path(path)
     try:
-        size = p.stat().st_size
+        info = p.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise XMLLoadError("Not a regular file (a FIFO, device or directory); refused", file=str(path))
+        if info.st_size > limit:
+            raise XMLLoadError(f"File too large ({info.st_size} bytes, limit {limit}); refused", file=str(path))
+        with p.open("rb") as handle:
+            raw = handle.read(limit + 1)
     except OSError as exc:
         raise XMLLoadError(f"Cannot read the file: {exc.strerror or exc}", file=str(path)) from None
-    if size > MAX_XML_BYTES:
-        raise XMLLoadError(f"File too large ({size} bytes, limit {MAX_XML_BYTES}); refused",
-                           file=str(path))
-    raw = p.read_bytes()
+    if len(raw) > limit:  # grew since stat
+        raise XMLLoadError(f"File too large (over {limit} bytes); refused", file=str(path))
+    return raw
+
+
+def read_xml_file(path: str | Path) -> XMLDocument:
+    raw = read_limited(path)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

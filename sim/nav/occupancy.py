@@ -242,6 +242,9 @@ class OccupancyGrid:
         image = Path(str(meta["image"]))
         if not image.is_absolute():
             image = yaml_path.parent / image
+        folder = yaml_path.parent.resolve()
+        if not image.resolve().is_relative_to(folder):  # a map file must not point the loader elsewhere
+            raise ValueError(f"{yaml_path}: image: {meta['image']} is outside the map file's folder {folder}")
         if not image.exists():
             alt = yaml_path.with_suffix(image.suffix or ".pgm")
             if not alt.exists():

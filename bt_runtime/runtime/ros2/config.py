@@ -10,11 +10,11 @@ import os
 from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class Qos(_Model):
@@ -164,6 +164,29 @@ class Ros2Config(_Model):
     validation: Validation = Field(default_factory=Validation)
     lifecycle: LifecycleConfig = Field(default_factory=LifecycleConfig)
     robot: RobotConfig | None = Field(default_factory=RobotConfig)
+
+    @field_validator("cyclonedds_uri")
+    @classmethod
+    def _cyclonedds_uri(cls, value: str | None) -> str | None:
+        """Inline Cyclone XML or ``file://`` paths (comma-separated), checked now rather than
+        failing inside Cyclone when the driver starts."""
+        if value is None or not value.strip():
+            return None
+        text = value.strip()
+        if text.startswith("<"):
+            from lxml import etree
+
+            try:
+                etree.fromstring(text.encode(), etree.XMLParser(resolve_entities=False, no_network=True))
+            except etree.XMLSyntaxError as exc:
+                raise ValueError(f"not well-formed Cyclone DDS XML: {exc}") from None
+            return value
+        for item in (part.strip() for part in text.split(",")):
+            if not item.startswith("file://"):
+                raise ValueError(f"expected inline XML (<CycloneDDS>...) or file://PATH, got {item[:80]!r}")
+            if not os.path.isfile(item[len("file://"):]):
+                raise ValueError(f"{item}: no such file")
+        return value
 
     @model_validator(mode="after")
     def _lifecycle_heartbeats(self) -> Ros2Config:
