@@ -170,6 +170,9 @@ class DdsNode:
             self.participant.__del__()
 
 
+_MAX_TAKE_FAILURES = 64  # consecutive failed takes in one callback before it gives up
+
+
 class Reader:
     """A DDS reader whose samples arrive on the loop as ``on_samples(samples, receive_time)``.
 
@@ -194,11 +197,17 @@ class Reader:
     def _on_data_available(self, reader: DataReader) -> None:  # a Cyclone thread
         if self.closed:
             return
-        while True:
+        failures = 0
+        while not self.closed:
             try:
                 samples = reader.take(N=32)
             except Exception:  # a sample that does not deserialise: drop it, count it
                 self.malformed += 1
+                failures += 1
+                if failures >= _MAX_TAKE_FAILURES:
+                    # take() that keeps failing is a reader being deleted, not bad data: leave,
+                    # or the participant's deletion (which waits for this callback) never ends
+                    return
                 continue
             if not samples:
                 return
