@@ -9,3 +9,55 @@ def tree_xml(body: str) -> str:
 
 
 IDLE_TREE = tree_xml('<KeepRunningUntilFailure><AlwaysSuccess/></KeepRunningUntilFailure>')
+
+
+class SimRobotProcess:
+    """``sim-robot`` in its own process on DDS domain ``domain`` (the DDS end-to-end tests)."""
+
+    def __init__(self, domain: int, *args: str, duration: float = 80.0):
+        import os
+        import subprocess
+        import sys
+
+        from tests.paths import ROOT
+
+        env = dict(os.environ, PYTHONPATH=str(ROOT))
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "bt_runtime.cli.sim_robot", "--domain", str(domain), "--duration",
+             f"{duration:g}", *args], cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    async def ready(self, timeout: float = 30.0) -> None:
+        import asyncio
+
+        loop = asyncio.get_running_loop()
+        line = await asyncio.wait_for(loop.run_in_executor(None, self.proc.stdout.readline), timeout)
+        if "sim-robot ready" not in line:
+            self.stop()
+            raise AssertionError(f"sim-robot did not start: {line!r} {self.proc.stderr.read()[-2000:]}")
+
+    def stop(self) -> None:
+        import contextlib
+        import subprocess
+
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(10)
+        for stream in (self.proc.stdout, self.proc.stderr):
+            with contextlib.suppress(Exception):
+                stream.close()
+
+
+async def wait_until(predicate, timeout: float, what: str) -> None:
+    """Poll ``predicate`` on the wall clock until true; AssertionError naming ``what`` after ``timeout`` s."""
+    import asyncio
+    import time
+
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}")
+        await asyncio.sleep(0.02)

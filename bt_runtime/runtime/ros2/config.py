@@ -86,6 +86,17 @@ class Navigation(_Model):
                                      "long ends ABORTED")
 
 
+class GoalServing(_Model):
+    """Goals from any ROS 2 client, served by the runtime (see ros2/action_server.py)."""
+
+    enabled: bool = True
+    action: str = Field("autonomy/navigate_to_pose", description="nav2_msgs/action/NavigateToPose "
+                        "server name (not Nav2's own navigate_to_pose, which the runtime uses)")
+    topic: str | None = Field("autonomy/goal_pose", description="geometry_msgs/msg/PoseStamped goals "
+                              "(RViz's 2D Goal Pose tool); None = off")
+    feedback_hz: float = Field(5.0, gt=0, le=50)
+
+
 class Component(_Model):
     kind: str = "sensor"
     heartbeat: Literal["streams", "lifecycle"] = Field(
@@ -160,6 +171,7 @@ class Ros2Config(_Model):
     loopback_only: bool = Field(False, description="use 127.0.0.1 only (a robot on this machine)")
     topics: Topics = Field(default_factory=Topics)
     navigation: Navigation = Field(default_factory=Navigation)
+    goals: GoalServing = Field(default_factory=GoalServing)
     components: dict[str, Component] = Field(default_factory=_default_components)
     validation: Validation = Field(default_factory=Validation)
     lifecycle: LifecycleConfig = Field(default_factory=LifecycleConfig)

@@ -76,6 +76,7 @@ class Ros2Driver:
         self.sent = 0
         self._diagnostics_writer: Any = None
         self.send_errors = 0
+        self.goal_server: Any = None  # action_server.GoalActionServer once serve_goals() ran
 
     # -- lifecycle -------------------------------------------------------------------------------
     async def start(self) -> None:
@@ -125,6 +126,9 @@ class Ros2Driver:
         if self.node is None:
             return
         await self.navigation.close()
+        if self.goal_server is not None:
+            self.goal_server.close()
+            self.goal_server = None
         if self._poller is not None:
             self._poller.cancel()
             with contextlib.suppress(asyncio.CancelledError):
@@ -134,6 +138,17 @@ class Ros2Driver:
         self._cmd_writer = None
         node.close()
         log.info("ros2_driver_stopped", received=dict(self.received), dropped=self.dropped_counts())
+
+    def serve_goals(self, intake: Any) -> None:
+        """Serve NavigateToPose and the goal topic for the runtime's goal intake (config.goals)."""
+        cfg = self.config.goals
+        if self.node is None or not cfg.enabled or self.goal_server is not None:
+            return
+        from .action_server import GoalActionServer
+
+        intake.feedback_period = 1.0 / cfg.feedback_hz
+        self.goal_server = GoalActionServer(self.node, intake, action=cfg.action, topic=cfg.topic,
+                                            map_frame=self.config.navigation.map_frame)
 
     # -- streams ---------------------------------------------------------------------------------
     def _stream_handler(self, stream: str, convert: Callable[[Any, float], Any]) -> Callable[[list, float], None]:
