@@ -20,6 +20,14 @@ AUTONOMY = str(ROOT / "trees" / "autonomy.xml")
 SPAWN = Pose2D(-2.0, -2.0, 0.0)
 
 
+async def until_driving(rt, timeout: float = 20.0) -> None:
+    """Wait (robot time) until the robot drives faster than 0.1 m/s."""
+    async def driving():
+        while speed_of(rt) < 0.1:
+            await asyncio.sleep(0.1)
+    await asyncio.wait_for(driving(), timeout)
+
+
 def speed_of(rt) -> float:
     odom = rt.backup.latest("odom")
     return abs(odom.twist.linear) if odom is not None else 0.0
@@ -50,8 +58,7 @@ async def test_cancel_ends_canceled_and_the_robot_stops(runtime):
     try:
         await asyncio.sleep(1.0)
         handle = rt.send_goal(Pose2D(3.5, -2.5, 0.0))
-        while speed_of(rt) < 0.1:
-            await asyncio.sleep(0.1)
+        await until_driving(rt)
         assert handle.cancel()
         result = await asyncio.wait_for(handle, 5)
         await asyncio.sleep(1.5)
@@ -70,8 +77,7 @@ async def test_a_new_goal_preempts_the_running_one(runtime):
     try:
         await asyncio.sleep(1.0)
         first = rt.send_goal(Pose2D(3.5, -2.5, 0.0))
-        while speed_of(rt) < 0.1:
-            await asyncio.sleep(0.1)
+        await until_driving(rt)
         second = rt.send_goal(Pose2D(-1.0, -2.0, 0.0))
         first_result = await asyncio.wait_for(first, 5)
         assert not second.done
