@@ -107,7 +107,9 @@ class FindAlternativeGoal(AsyncActionNode):
                 input_port("step", float, 0.1, "m between rings"),
                 input_port("directions", int, 16, "candidates per ring"),
                 input_port("clearance", float, 0.55, "m from lethal cells preferred (inflation radius + margin)"),
-                input_port("min_clearance", float, 0.0, "m from lethal cells at least (0: robot radius + 0.05)"),
+                input_port("min_clearance", float, 0.0, "m from lethal cells at least (0: robot radius + 0.15, "
+                                                          "three cells, so re-marking from the scan does not "
+                                                          "put it in the inscribed zone)"),
                 input_port("extra_rings", int, 2, "rings planned beyond the first reachable one"),
                 input_port("distance_weight", float, 2.0, "cost per m from the goal, in m of path"),
                 output_port("alternative", POSE, "{nav_goal}"), output_port("path", PATH, "{path}"),
@@ -119,7 +121,8 @@ class FindAlternativeGoal(AsyncActionNode):
         goal: Pose2D = self.get_input("goal")
         memory = self.context.extras.setdefault("alternative_goals", {})
         kept = memory.get(goal)
-        if kept is not None:
+        floor = self.get_input("min_clearance") or (self.context.robot.radius + 0.15)
+        if kept is not None and _clearance(nav, kept) >= floor:
             result = await nav.compute_path_to_pose(kept)
             if result.succeeded and result.path is not None and len(result.path) >= 1:
                 return self._use(goal, kept, result.path, 1)
@@ -127,7 +130,6 @@ class FindAlternativeGoal(AsyncActionNode):
         robot = robot_pose(self)
         candidates = ring_candidates(goal, robot, self.get_input("max_radius"), self.get_input("step"),
                                      self.get_input("directions"))
-        floor = self.get_input("min_clearance") or (self.context.robot.radius + 0.05)
         clear = [(c, _clearance(nav, c)) for c in candidates]
         for need in (self.get_input("clearance"), floor):
             best, tried = await self._search(nav, goal, [c for c, d in clear if d >= need])

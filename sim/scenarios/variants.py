@@ -165,10 +165,12 @@ def sensor_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
     if driving:
         success.append({"kind": "reach_goal", "goal": 0, "tolerance": 0.25})
     limit = (_drive_time(length) + 30.0) if driving else 25.0
+    last_fault = max((f.get("delay", 0.0) if driving else f.get("at", 0.0)) for f in faults)
     return _spec(f"V{index:04d}_sensor", "III", f"{' + '.join(hows)} while "
                  f"{'driving' if driving else 'standing'} ({robot} in {world})",
                  requirements=["fn_req1", "fn_req2", "fn_req5"], world=world, robot=robot,
                  start=_pose(start), goals=goals, faults=faults, success=success, time_limit=limit,
+                 settle=last_fault + 12.0,  # a fault after the goal was reached must still be handled
                  speeds={"linear": SPEED})
 
 
