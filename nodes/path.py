@@ -107,8 +107,8 @@ class FindAlternativeGoal(AsyncActionNode):
                 input_port("step", float, 0.1, "m between rings"),
                 input_port("directions", int, 16, "candidates per ring"),
                 input_port("clearance", float, 0.55, "m from lethal cells preferred (inflation radius + margin)"),
-                input_port("min_clearance", float, 0.0, "m from lethal cells at least (0: robot radius + 0.15, "
-                                                          "three cells, so re-marking from the scan does not "
+                input_port("min_clearance", float, 0.0, "m from lethal cells at least (0: robot radius + 0.1, "
+                                                          "two cells, so re-marking from the scan does not "
                                                           "put it in the inscribed zone)"),
                 input_port("extra_rings", int, 2, "rings planned beyond the first reachable one"),
                 input_port("distance_weight", float, 2.0, "cost per m from the goal, in m of path"),
@@ -121,8 +121,8 @@ class FindAlternativeGoal(AsyncActionNode):
         goal: Pose2D = self.get_input("goal")
         memory = self.context.extras.setdefault("alternative_goals", {})
         kept = memory.get(goal)
-        floor = self.get_input("min_clearance") or (self.context.robot.radius + 0.15)
-        if kept is not None and _clearance(nav, kept) >= floor:
+        floor = self.get_input("min_clearance") or (self.context.robot.radius + 0.1)
+        if kept is not None and _clearance(nav, kept) >= floor - 0.05:  # one cell of re-marking tolerated
             result = await nav.compute_path_to_pose(kept)
             if result.succeeded and result.path is not None and len(result.path) >= 1:
                 return self._use(goal, kept, result.path, 1)
