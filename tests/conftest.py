@@ -10,6 +10,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 import pytest
+import structlog
 
 # installed packages load the plugin through their pytest11 entry point; a bare checkout loads it here
 if not any(ep.value == "bt_runtime.testing.plugin" for ep in entry_points(group="pytest11")):
@@ -40,3 +41,15 @@ def _quiet_runtime_logs(request):
     if _in_virtual_dir(request.node):
         request.getfixturevalue("bt_quiet_logs")
     yield
+
+
+def pytest_collection_finish(session):
+    structlog.reset_defaults()  # a module that quietened logging while it was imported
+
+
+@pytest.fixture(autouse=True)
+def _logging_config_does_not_leak():
+    """A test that configures structlog (a campaign run in-process quietens it) must not change
+    what the next test logs: capture_logs() sees nothing below a filtering level."""
+    yield
+    structlog.reset_defaults()
