@@ -35,6 +35,11 @@ class SimRobotProcess:
             self.stop()
             raise AssertionError(f"sim-robot did not start: {line!r} {self.proc.stderr.read()[-2000:]}")
 
+    def kill(self) -> None:
+        """SIGKILL: the robot vanishes without a goodbye (its DDS participant lingers for its lease)."""
+        self.proc.kill()
+        self.proc.wait(10)
+
     def stop(self) -> None:
         import contextlib
         import subprocess
@@ -44,8 +49,7 @@ class SimRobotProcess:
             try:
                 self.proc.wait(10)
             except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(10)
+                self.kill()
         for stream in (self.proc.stdout, self.proc.stderr):
             with contextlib.suppress(Exception):
                 stream.close()

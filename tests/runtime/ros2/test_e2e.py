@@ -17,8 +17,6 @@ import contextlib
 import itertools
 import math
 import os
-import subprocess
-import sys
 import time
 
 import pytest
@@ -31,6 +29,8 @@ from bt_runtime.runtime.messages import Pose2D  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
 from bt_runtime.runtime.supervisor import Health  # noqa: E402
 from bt_runtime.status import FAILURE, SUCCESS  # noqa: E402
+from tests.helpers import SimRobotProcess  # noqa: E402
+from tests.helpers import wait_until as wait_for  # noqa: E402
 from tests.paths import ROOT
 
 SPAWN = Pose2D(-2.0, -2.0, 0.0)  # apartment spawn
@@ -52,36 +52,6 @@ def domain() -> int:
     return 100 + (os.getpid() + 37 * next(_DOMAINS)) % 100
 
 
-class SimRobotProcess:
-    def __init__(self, domain: int, *args: str):
-        env = dict(os.environ, PYTHONPATH=str(ROOT))
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "bt_runtime.cli.sim_robot", "--domain", str(domain), "--duration", "80", *args],
-            cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-    async def ready(self, timeout: float = 30.0) -> None:
-        loop = asyncio.get_running_loop()
-        line = await asyncio.wait_for(loop.run_in_executor(None, self.proc.stdout.readline), timeout)
-        if "sim-robot ready" not in line:
-            self.stop()
-            raise AssertionError(f"sim-robot did not start: {line!r} {self.proc.stderr.read()[-2000:]}")
-
-    def kill(self) -> None:
-        self.proc.kill()
-        self.proc.wait(10)
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.kill()
-        for stream in (self.proc.stdout, self.proc.stderr):
-            with contextlib.suppress(Exception):
-                stream.close()
-
-
 @contextlib.asynccontextmanager
 async def sim_robot(domain: int, *args: str):
     robot = SimRobotProcess(domain, *args)
@@ -90,14 +60,6 @@ async def sim_robot(domain: int, *args: str):
         yield robot
     finally:
         robot.stop()
-
-
-async def wait_for(predicate, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await asyncio.sleep(0.02)
 
 
 # --- a small purpose-built tree (until the behaviour library exists) -----------------------------
