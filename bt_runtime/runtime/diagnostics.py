@@ -36,11 +36,14 @@ class ComponentDiagnostic:
 
 def component_diagnostics(supervisor: SystemSupervisor, now: float) -> list[ComponentDiagnostic]:
     """One diagnostic per supervised component: level, message, last-seen age, restarts."""
+    last_event: dict[str, SupervisorEvent] = {}
+    for event in supervisor.events:  # one pass over the log, not one per component
+        last_event[event.component] = event
     out = []
     for name, record in supervisor.components.items():
         state = record.state
-        events = supervisor.events_of(name)
-        reason = events[-1].reason if events and events[-1].state is state else ""
+        last = last_event.get(name)
+        reason = last.reason if last is not None and last.state is state else ""
         message = state.value + (f": {reason}" if reason else "")
         age = "never" if record.last_seen is None else f"{max(0.0, now - record.last_seen):.3f}"
         values = (("state", state.value), ("last_seen_age_s", age), ("restarts", str(record.restarts)),

@@ -50,9 +50,7 @@ def test_component_levels() -> None:
 
     class Sup:
         components = {s.value: Rec(s) for s in Health}
-
-        def events_of(self, name):
-            return []
+        events: list = []
 
     levels = {d.hardware_id: d.level for d in component_diagnostics(Sup(), 0.0)}
     assert levels == {"ok": OK, "restarting": WARN, "failed": ERROR, "dead": ERROR, "unknown": STALE}
