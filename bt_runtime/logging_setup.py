@@ -2,13 +2,17 @@
 
 Processes call ``configure_logging`` once at start-up (the CLI does). Library code only calls
 ``structlog.get_logger(name)`` and logs events with keys; simulation-time keys (``sim_time``)
-are added by the components themselves, so lines from different parts line up in time.
+are added by the components themselves, so lines from different parts line up in time. They
+read the runtime's loop clock; where the driver knows the robot's own clock (ROS time on a ROS 2
+robot), ``use_robot_time`` makes every ``sim_time`` the robot's time, so log lines line up with
+the robot's logs and bags.
 """
 
 from __future__ import annotations
 
 import logging
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO
 
@@ -16,6 +20,26 @@ import structlog
 
 _LEVELS = {"debug": logging.DEBUG, "info": logging.INFO, "warning": logging.WARNING,
            "error": logging.ERROR, "critical": logging.CRITICAL}
+
+
+_robot_time: Callable[[float], float | None] | None = None
+
+
+def use_robot_time(translate: Callable[[float], float | None] | None) -> None:
+    """Log ``sim_time`` values (loop-clock times) as ``translate(t)``; None switches it off."""
+    global _robot_time
+    _robot_time = translate
+
+
+def _sim_time_as_robot_time(_logger: object, _method: str, event: dict) -> dict:
+    translate = _robot_time
+    if translate is not None:
+        t = event.get("sim_time")
+        if isinstance(t, float | int):
+            robot = translate(t)
+            if robot is not None:
+                event["sim_time"] = round(robot, 3)
+    return event
 
 
 class _SafeStream:
@@ -64,7 +88,8 @@ def configure_logging(*, json: bool | None = None, file: str | Path | None = Non
             json = not (hasattr(out, "isatty") and out.isatty())
     renderer = structlog.processors.JSONRenderer() if json else structlog.dev.ConsoleRenderer(colors=False)
     structlog.configure(
-        processors=[structlog.processors.add_log_level,
+        processors=[_sim_time_as_robot_time,
+                    structlog.processors.add_log_level,
                     structlog.processors.TimeStamper(fmt="iso", utc=True),
                     structlog.processors.format_exc_info,
                     renderer],

@@ -22,7 +22,9 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``sim/fault`` (in) | std_msgs/String, a JSON fault (``{"kind": "crash", "component": "lidar"}``; ``nav_crash``/``nav_hang``/``nav_fail_until_restart`` with a nav server ``component``) | ``sim.faults``, ``NavStack`` |
 
 A DDS peer cannot share a virtual clock, so this runs on the wall clock. Header stamps are
-ROS time (the system clock, ``idl.Time.now()``).
+ROS time (the system clock): each sensor message carries the time it was taken (its simulator
+stamp on the system clock), so a driver fault that republishes old data (``stale``) goes out
+with its old stamp, as a real driver's would.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import asyncio
 import contextlib
 import json
 import math
+import time
 from typing import Any
 
 import structlog
@@ -63,8 +66,9 @@ def parse_crash(text: str) -> tuple[str, float]:
     return name.strip(), float(t)
 
 
-def _header(frame: str) -> idl.Header:
-    return idl.Header(stamp=idl.Time.now(), frame_id=frame)
+def _header(frame: str, stamp: float | None = None) -> idl.Header:
+    """A header stamped ``stamp`` (ROS time, s), or now."""
+    return idl.Header(stamp=idl.Time.now() if stamp is None else idl.Time.from_sec(stamp), frame_id=frame)
 
 
 def _stamped(pose: Pose2D, frame: str = "map") -> idl.PoseStamped:
@@ -105,6 +109,7 @@ class SimRobot:
         self._unsub: list[Any] = []
         self._servers: list[Any] = []
         self.cmd_receive_times: list[tuple[float, float]] = []  # (loop time, linear) for benchmarks
+        self._ros_offset = 0.0  # system clock - loop clock, fixed at start
 
     @property
     def sim(self):
@@ -112,6 +117,7 @@ class SimRobot:
 
     # -- start / stop ------------------------------------------------------------------------------
     async def start(self) -> None:
+        self._ros_offset = time.time() - asyncio.get_running_loop().time()
         nav_params = ({"controller": {"xy_goal_tolerance": self.goal_tolerance}}
                       if self.goal_tolerance is not None else None)
         self.driver = driver = SimDriver(self.world, self.robot, seed=self.seed, cruise_speed=self.cruise_speed,
@@ -188,6 +194,10 @@ class SimRobot:
             self.node = None
 
     # -- sensors -> DDS ----------------------------------------------------------------------------
+    def ros_time(self, sim_stamp: float) -> float:
+        """ROS time (system clock) of a simulator stamp (this process's loop clock)."""
+        return sim_stamp + self._ros_offset
+
     def _forward(self, stream: str, writer: Any, convert: Any):
         def forward(msg: Any) -> None:
             if self.node is None or self.node.closed:
@@ -197,39 +207,35 @@ class SimRobot:
 
         return forward
 
-    @staticmethod
-    def _scan(m: Any) -> idl.LaserScan:
+    def _scan(self, m: Any) -> idl.LaserScan:
         n = len(m.ranges)
-        return idl.LaserScan(header=_header("base_scan"), angle_min=m.angle_min,
+        return idl.LaserScan(header=_header("base_scan", self.ros_time(m.stamp)), angle_min=m.angle_min,
                              angle_max=m.angle_min + m.angle_increment * (n - 1), angle_increment=m.angle_increment,
                              time_increment=0.0, scan_time=0.0, range_min=m.range_min, range_max=m.range_max,
                              ranges=m.ranges.astype("float32").tolist())
 
-    @staticmethod
-    def _imu(m: Any) -> idl.Imu:
-        return idl.Imu(header=_header("imu_link"), orientation=quaternion_of(m.yaw),
+    def _imu(self, m: Any) -> idl.Imu:
+        return idl.Imu(header=_header("imu_link", self.ros_time(m.stamp)), orientation=quaternion_of(m.yaw),
                        angular_velocity=idl.Vector3(0.0, 0.0, m.yaw_rate),
                        linear_acceleration=idl.Vector3(m.accel_x, m.accel_y, 9.81))
 
-    @staticmethod
-    def _odom(m: Any) -> idl.Odometry:
-        return idl.Odometry(header=_header("odom"), child_frame_id="base_footprint",
+    def _odom(self, m: Any) -> idl.Odometry:
+        return idl.Odometry(header=_header("odom", self.ros_time(m.stamp)), child_frame_id="base_footprint",
                             pose=idl.PoseWithCovariance(pose=pose_msg(m.pose)),
                             twist=idl.TwistWithCovariance(twist=idl.Twist(
                                 linear=idl.Vector3(m.twist.linear, 0.0, 0.0),
                                 angular=idl.Vector3(0.0, 0.0, m.twist.angular))))
 
-    @staticmethod
-    def _pose(m: Any) -> idl.PoseWithCovarianceStamped:
+    def _pose(self, m: Any) -> idl.PoseWithCovarianceStamped:
         cov = [0.0] * 36
         cov[0] = cov[7] = m.covariance ** 2
         cov[35] = (m.covariance * 0.5) ** 2
-        return idl.PoseWithCovarianceStamped(header=_header("map"),
+        return idl.PoseWithCovarianceStamped(header=_header("map", self.ros_time(m.stamp)),
                                              pose=idl.PoseWithCovariance(pose=pose_msg(m.pose), covariance=cov))
 
-    @staticmethod
-    def _battery(m: Any) -> idl.BatteryState:
-        return idl.BatteryState(header=_header("base_link"), voltage=m.voltage, current=-m.current,
+    def _battery(self, m: Any) -> idl.BatteryState:
+        return idl.BatteryState(header=_header("base_link", self.ros_time(m.stamp)), voltage=m.voltage,
+                                current=-m.current,
                                 charge=math.nan, capacity=m.capacity_ah, design_capacity=m.capacity_ah,
                                 percentage=m.percentage / 100.0, present=True,
                                 power_supply_status=1 if m.current < 0 else 2)

@@ -23,6 +23,7 @@ from typing import Any
 
 import structlog
 
+from .. import logging_setup
 from ..factory import BehaviorTreeFactory
 from ..status import FAILURE, SUCCESS, NodeStatus
 from ..tree import Tree
@@ -97,6 +98,7 @@ class AutonomyRuntime:
         for registration in register:
             registration(self.factory)
         self.tree: Tree | None = None
+        self._logs_robot_time = False
         self.tick_loop: TickLoop | None = None
         self.goals = GoalIntake(self)  # goals from the API and the driver's clients (goal_intake.py)
         self.completed: asyncio.Future = self.loop.create_future()
@@ -169,6 +171,10 @@ class AutonomyRuntime:
         self._started_sim = self.clock()
         self._grid_origin = self.clock()  # the driver's periodic work starts on this grid
         await self.driver.start()
+        robot_time = getattr(self.driver, "robot_time", None)
+        if callable(robot_time):  # log lines carry the robot's own time (ROS time), not the loop's
+            logging_setup.use_robot_time(robot_time)
+            self._logs_robot_time = True
         serve_goals = getattr(self.driver, "serve_goals", None)
         if callable(serve_goals):  # e.g. the ROS 2 driver's NavigateToPose action server
             serve_goals(self.goals)
@@ -285,6 +291,9 @@ class AutonomyRuntime:
             log.error("driver_stop_failed", error=repr(exc))
         unregister_live(self)
         log.info("runtime_stopped", sim_time=round(self.clock(), 3))
+        if self._logs_robot_time:
+            logging_setup.use_robot_time(None)
+            self._logs_robot_time = False
 
     def _halt_tree_logged(self) -> None:
         """Halt the tree; a node that fails to halt is logged (every node is halted anyway)."""

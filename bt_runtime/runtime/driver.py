@@ -113,3 +113,5 @@ class RobotDriver(Protocol):
 
     # Optional: ``robot_info() -> RobotInfo`` (footprint, speed limits, power model). The
     # runtime puts it on the context as ``context.robot``; defaults are used if absent.
+    # Optional: ``robot_time(loop_time) -> float | None``, the robot's own clock (ROS time) at a
+    # loop-clock time, where it differs from the loop clock; log lines' ``sim_time`` use it.

@@ -3,9 +3,12 @@
 Sensor topics are read by Cyclone DDS listeners on Cyclone's threads; each sample is stamped
 there with the loop clock (its receive time) and handed to the event loop with
 ``call_soon_threadsafe`` (see ``dds.py``). On the loop it is checked, converted to the
-runtime's message dataclasses and passed to the stream's subscribers. Malformed or absurd
-messages are dropped and counted per stream (``dropped``); the header stamp of the last good
-message of each stream is kept in ``header_stamps`` (ROS time, seconds).
+runtime's message dataclasses and passed to the stream's subscribers. A message with a header
+keeps its own time: the header stamp (ROS time) is mapped onto the loop clock by
+``robot_clock`` (so republished old data looks old to the supervisor), and ``robot_time`` gives
+log lines the robot's time. Malformed or absurd messages are dropped and counted per stream
+(``dropped``); the header stamp of the last good message of each stream is kept in
+``header_stamps`` (ROS time, seconds).
 
 Only the decision gate calls ``send_velocity``; it writes the robot's ``cmd_vel``. Nav2's
 controller must therefore publish elsewhere (``cmd_vel_nav`` by default), which this driver
@@ -17,6 +20,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import os
+import time
 from collections import defaultdict
 from collections.abc import Callable
 from typing import Any
@@ -28,6 +32,7 @@ from . import dds, idl
 from .config import Qos, Ros2Config
 from .convert import Converter, Drop
 from .navigation import Ros2Navigation
+from .robot_clock import RobotClock
 
 log = structlog.get_logger("bt_runtime.ros2")
 
@@ -64,6 +69,7 @@ class Ros2Driver:
         self.dropped: dict[str, int] = defaultdict(int)
         self.drop_reasons: dict[str, str] = {}
         self.header_stamps: dict[str, float] = {}
+        self.robot_clock = RobotClock()  # header stamps (ROS time) -> loop-clock stamps
         self.latest: dict[str, Any] = {}
         self.last_seen: dict[str, float] = {}
         self._readers: dict[str, dds.Reader] = {}
@@ -154,20 +160,26 @@ class Ros2Driver:
     def _stream_handler(self, stream: str, convert: Callable[[Any, float], Any]) -> Callable[[list, float], None]:
         subscribers = self._subscribers
 
+        robot_clock = self.robot_clock
+
         def on_samples(samples: list, now: float) -> None:
             for raw in samples:
                 self.received[stream] += 1
+                header = getattr(raw, "header", None)
+                stamp = now
+                if header is not None:
+                    header_stamp = header.stamp.to_sec()
+                    stamp = robot_clock.to_loop(stream, header_stamp, now)
                 try:
-                    msg = convert(raw, now)
+                    msg = convert(raw, stamp)
                 except Drop as why:
                     self.count_drop(stream, str(why))
                     continue
                 except Exception as exc:  # anything odd in a message is the message's fault
                     self.count_drop(stream, repr(exc))
                     continue
-                header = getattr(raw, "header", None)
                 if header is not None:
-                    self.header_stamps[stream] = header.stamp.to_sec()
+                    self.header_stamps[stream] = header_stamp
                 self.latest[stream] = msg
                 self.last_seen[stream] = now
                 for callback in tuple(subscribers.get(stream, ())):
@@ -203,6 +215,15 @@ class Ros2Driver:
         if self.drop_reasons.get(stream) != reason:
             log.warning("ros2_message_dropped", stream=stream, reason=reason, count=self.dropped[stream])
         self.drop_reasons[stream] = reason
+
+    def robot_time(self, loop_time: float) -> float:
+        """The robot's ROS time at a loop-clock time: learned from header stamps, and before the
+        first stamped message the system clock (ROS time unless the robot runs on sim time)."""
+        robot = self.robot_clock.to_robot(loop_time)
+        if robot is None:
+            loop = self.loop or asyncio.get_running_loop()
+            robot = loop_time + (time.time() - loop.time())
+        return robot
 
     def dropped_counts(self) -> dict[str, int]:
         """Dropped messages per stream: failed validation + failed deserialisation."""
