@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from bt_runtime.runtime.driver import STREAMS
-from bt_runtime.runtime.messages import ComponentInfo, ComponentState, RobotInfo
+from bt_runtime.runtime.messages import ComponentInfo, ComponentState, RobotInfo, Twist
+from bt_runtime.runtime.twist_mux import INPUT_STREAM, LOCK_STREAM
 
 from .nav import NavParams, NavStack, OccupancyGrid, RobotParams
 from .simulator import Simulator
@@ -80,10 +81,20 @@ class SimDriver:
         """A robot stream (what a real robot's topics carry). The simulator's own topics (the
         ground truth, its event log) are refused: they are for judging and recording, never
         for deciding; those subscribe on ``driver.sim``."""
-        if stream not in ROBOT_STREAMS and not stream.startswith("heartbeat/"):
+        if stream not in ROBOT_STREAMS and not stream.startswith(("heartbeat/", INPUT_STREAM, LOCK_STREAM)):
             raise ValueError(f"{stream!r} is not a robot stream (streams: {', '.join(sorted(ROBOT_STREAMS))}, "
-                             "heartbeat/<component>); the simulator's truth is not on the driver interface")
+                             "heartbeat/<component>, cmd_vel_input/<input>, lock/<lock>); the simulator's "
+                             "truth is not on the driver interface")
         return self.sim.subscribe(stream, callback)
+
+    def publish_command_input(self, name: str, linear: float, angular: float) -> None:
+        """A velocity command on the gate's input ``name`` (e.g. "teleop"), as a joystick
+        publishing on that input's topic would send it (``cmd_vel_input/<name>``)."""
+        self.sim.bus.publish(INPUT_STREAM + name, Twist(float(linear), float(angular)))
+
+    def publish_lock(self, name: str, locked: bool) -> None:
+        """A lock message (std_msgs/Bool) on the gate's lock ``name`` (``lock/<name>``)."""
+        self.sim.bus.publish(LOCK_STREAM + name, bool(locked))
 
     def send_velocity(self, linear: float, angular: float) -> None:
         self.sim.command(linear, angular)

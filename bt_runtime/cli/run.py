@@ -56,6 +56,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--driver", default="sim", choices=["sim", "ros2"])
     p.add_argument("--config", type=Path, default=None,
                    help="runtime configuration (YAML; `python -m bt_runtime config` prints every setting)")
+    p.add_argument("--twist-mux", type=Path, default=None, metavar="FILE",
+                   help="the gate's inputs and locks from a twist_mux parameter file (docs/twist_mux.example.yaml)")
     p.add_argument("--ros2-config", type=Path, default=None, metavar="FILE",
                    help="--driver ros2: topics, QoS, domain, Nav2 names, components (YAML, see docs/ros2.md)")
     p.add_argument("--loopback", action="store_true",
@@ -124,13 +126,24 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def load_config(path: Path | None):
-    from ..runtime.config_file import ConfigError, load_runtime_config
+def load_config(path: Path | None, twist_mux: Path | None = None):
+    from pydantic import ValidationError
+
+    from ..runtime.config_file import ConfigError, load_runtime_config, plain_errors
 
     try:
-        return load_runtime_config(path)
+        config = load_runtime_config(path)
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
+    if twist_mux is not None:
+        try:
+            config.gate = config.gate.with_twist_mux(twist_mux)
+        except ValueError as exc:  # TwistMuxFileError, or a ValidationError of the gate's settings
+            if not isinstance(exc, ValidationError):
+                raise UsageError(f"--twist-mux: {exc}") from None
+            raise UsageError(f"--twist-mux {twist_mux}: "
+                             + "; ".join(p.removeprefix("'(top level)': ") for p in plain_errors(exc))) from None
+    return config
 
 
 def _robot_has_bumper(robot: str) -> bool:
@@ -293,7 +306,7 @@ def run(args: argparse.Namespace) -> int:
             log_file = configure_logging(file=args.log_file, level=args.log_level)
         else:
             configure_logging(json=False, stream=console or sys.stderr, level="warning")
-        config = load_config(args.config)
+        config = load_config(args.config, getattr(args, "twist_mux", None))
         try:
             registrations = node_registrations(args)
         except RegistrationError as exc:

@@ -2,11 +2,22 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from .driver import STREAMS
+from .twist_mux_config import (
+    NAV_NAMES,
+    TREE_NAMES,
+    MuxInputConfig,
+    MuxLockConfig,
+    check_names,
+    default_inputs,
+    default_locks,
+    load_twist_mux_file,
+)
 
 
 class _Model(BaseModel):
@@ -97,6 +108,49 @@ class GateConfig(_Model):
                                                     "event loop stalls); None: on for real-time loops")
     nonfinite_repeats: int = Field(3, ge=1, description="non-finite commands in a row from one source before "
                                                         "the tree gets a failure")
+    inputs: dict[str, MuxInputConfig] = Field(
+        default_factory=default_inputs,
+        description="twist_mux-style velocity inputs beside the tree and navigation (name: topic, priority "
+                    "1..255, timeout s); entries named tree or navigation set those sources' priority and "
+                    "timeout (docs/runtime.md)")
+    locks: dict[str, MuxLockConfig] = Field(
+        default_factory=default_locks,
+        description="twist_mux-style locks (std_msgs/Bool): while true, or silent past a timeout > 0, inputs "
+                    "with a lower priority are masked")
+    twist_mux: Path | None = Field(None, description="a twist_mux parameter file (its topics and locks replace "
+                                                     "inputs and locks); relative to this file's folder")
+
+    @model_validator(mode="after")
+    def _twist_mux(self) -> GateConfig:
+        """Read the twist_mux file, then move the tree's and navigation's entries into
+        ``priorities`` and the stale timeouts, so ``inputs`` holds only the extra inputs."""
+        if self.twist_mux is not None:
+            self.inputs, self.locks = load_twist_mux_file(self.twist_mux)
+        check_names(self.inputs, self.locks)
+        priorities = dict(self.priorities)
+        for names, source, field in ((TREE_NAMES, "tree", "tree_stale_timeout"),
+                                     (NAV_NAMES, "nav", "nav_stale_timeout")):
+            given = [n for n in names if n in self.inputs]
+            if len(given) > 1:
+                raise ValueError(f"inputs: {' and '.join(given)} are the same source; give one")
+            if given:
+                spec = self.inputs.pop(given[0])
+                if spec.timeout == 0:
+                    raise ValueError(f"inputs.{given[0]}.timeout: 0 (never stale) is not allowed for the "
+                                     f"{source} command: the gate must stop a source that went silent")
+                priorities[source] = spec.priority
+                setattr(self, field, spec.timeout)
+        self.priorities = priorities
+        return self
+
+    def with_twist_mux(self, path: str | Path) -> GateConfig:
+        """This configuration with its inputs and locks from a twist_mux file (``run --twist-mux``)."""
+        inputs, locks = load_twist_mux_file(path)  # TwistMuxFileError names the file and the field
+        data = self.model_dump(exclude={"inputs", "locks", "twist_mux"})
+        config = GateConfig.model_validate({**data, "inputs": {k: v.model_dump() for k, v in inputs.items()},
+                                            "locks": {k: v.model_dump() for k, v in locks.items()}})
+        config.twist_mux = Path(path)
+        return config
 
 
 class RuntimeConfig(_Model):

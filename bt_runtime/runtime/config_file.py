@@ -75,6 +75,9 @@ def load_runtime_config(path: str | Path | None) -> RuntimeConfig:
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: expected sections such as 'tick:' or 'gate:' at the top, "
                           f"got {type(data).__name__}")
+    gate = data.get("gate")
+    if isinstance(gate, dict) and isinstance(gate.get("twist_mux"), str):  # relative to this file's folder
+        gate["twist_mux"] = str(path.parent / Path(gate["twist_mux"]).expanduser())
     try:
         return RuntimeConfig.model_validate(data)
     except ValidationError as exc:

@@ -9,7 +9,14 @@ Streams:
   ``scan`` LaserScan, ``imu`` Imu, ``odom`` Odometry, ``pose`` LocalizedPose (map frame),
   ``bumper`` Contact, ``battery`` BatteryState, ``nav_cmd_vel`` Twist (what the navigation
   stack's controller wants to send; the gate decides whether it reaches the wheels),
-  ``cmd_vel_out`` Twist (what actually went to the base; for recording).
+  ``cmd_vel_out`` Twist (what actually went to the base; for recording),
+  ``cmd_vel_input/<name>`` Twist (a velocity input of the gate such as teleop, see
+  ``twist_mux.py``) and ``lock/<name>`` bool (a gate lock such as ``e_stop``).
+
+A driver that reads inputs from topics may offer ``open_command_inputs(inputs, locks)``
+(lists of ``twist_mux.MuxInput`` / ``MuxLock``, each with ``name`` and ``topic``): the gate
+calls it before subscribing to those streams. The simulator offers
+``publish_command_input(name, linear, angular)`` and ``publish_lock(name, locked)`` instead.
 """
 
 from __future__ import annotations

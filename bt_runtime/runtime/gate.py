@@ -1,6 +1,8 @@
 """The decision gate: the only writer of the robot's velocity (fn_req3, fn_req4).
 
-Priority: emergency stop > tree command > navigation command. The gate applies the current
+Priority: emergency stop > dead-man > the twist_mux-style inputs (``twist_mux.py``): by
+default teleop (100) > tree command (20) > navigation command (10), with locks that mask
+lower-priority inputs (by default an ``e_stop`` lock at 255). The gate applies the current
 speed limit, publishes an explicit zero whenever it stops the robot, and outputs zero when the
 tree's heartbeat is older than the dead-man timeout or the chosen source is stale, so a
 crashed tree or a navigation stack that ignores cancel can never keep the robot moving. Every
@@ -30,6 +32,7 @@ import structlog
 from .command_limits import CommandLimiter, MotionLimits, is_finite
 from .config import GateConfig
 from .messages import ZERO_TWIST, Twist
+from .twist_mux import INPUT_STREAM, LOCK_STREAM, MuxInput, TwistMux
 
 if TYPE_CHECKING:
     from .backup import DataBackup
@@ -38,7 +41,7 @@ if TYPE_CHECKING:
 
 log = structlog.get_logger("bt_runtime.gate")
 
-ESTOP, DEADMAN, TREE, NAV, IDLE = "estop", "deadman", "tree", "nav", "idle"
+ESTOP, DEADMAN, TREE, NAV, IDLE, LOCK = "estop", "deadman", "tree", "nav", "idle", "lock"
 
 
 class UnsafeCommandError(ValueError):
@@ -93,15 +96,57 @@ class DecisionGate:
         self._last_output_time = -math.inf
         self.refused: dict[str, RefusedCommands] = {}
         self.watchdog: LoopWatchdog | None = None
+        self.mux = TwistMux(self.config.inputs, self.config.locks)
 
     # -- setup ---------------------------------------------------------------------------------
     def attach(self) -> None:
-        self._unsubscribe = self.driver.subscribe("nav_cmd_vel", self._on_nav)
+        """Subscribe to navigation's command and to every extra input and lock; a driver that
+        reads topics (ROS 2) is told which first (``open_command_inputs``, optional)."""
+        mux, driver = self.mux, self.driver
+        open_inputs = getattr(driver, "open_command_inputs", None)
+        if callable(open_inputs) and (mux.inputs or mux.locks):
+            open_inputs(list(mux.inputs.values()), list(mux.locks.values()))
+        unsubscribe = [driver.subscribe("nav_cmd_vel", self._on_nav)]
+        for name in mux.inputs:
+            unsubscribe.append(driver.subscribe(INPUT_STREAM + name, self._input_handler(name)))
+        for name in mux.locks:
+            unsubscribe.append(driver.subscribe(LOCK_STREAM + name, self._lock_handler(name)))
+
+        def unsubscribe_all() -> None:
+            for unsub in unsubscribe:
+                unsub()
+
+        self._unsubscribe = unsubscribe_all
 
     def detach(self) -> None:
         if self._unsubscribe is not None:
             self._unsubscribe()
             self._unsubscribe = None
+
+    def _input_handler(self, name: str) -> Callable[[Twist], None]:
+        def on_input(twist: Twist) -> None:
+            """A command from an extra input (teleop...): refused if non-finite (the input then
+            holds zero while fresh: a broken joystick stops the robot rather than handing it
+            back to navigation), published at once if it wins."""
+            if self._refuse_if_nonfinite(name, twist.linear, twist.angular):
+                twist = ZERO_TWIST
+            now = self.clock()
+            self.mux.set_command(name, Twist(float(twist.linear), float(twist.angular)), now)
+            if not self.config.passthrough:
+                self._apply(now)
+
+        return on_input
+
+    def _lock_handler(self, name: str) -> Callable[[Any], None]:
+        def on_lock(value: Any) -> None:
+            now = self.clock()
+            locked = bool(getattr(value, "data", value))
+            if self.mux.set_lock(name, locked, now):
+                (log.warning if locked else log.info)("gate_lock", lock=name, locked=locked, sim_time=round(now, 3))
+            if not self.config.passthrough:
+                self._apply(now)
+
+        return on_lock
 
     def _on_nav(self, twist: Twist) -> None:
         if self._refuse_if_nonfinite(NAV, twist.linear, twist.angular):
@@ -260,7 +305,7 @@ class DecisionGate:
         cfg = self.config
         deadline = now + 1.0 / cfg.min_rate_hz
         if not cfg.passthrough:
-            candidates = [self._heartbeat + cfg.deadman_timeout + 1e-6]
+            candidates = [self._heartbeat + cfg.deadman_timeout + 1e-6, self.mux.next_change(now) + 1e-6]
             if self.source == TREE:
                 candidates.append(self._tree_stamp + cfg.tree_stale_timeout + 1e-6)
             elif self.source == NAV:
@@ -279,18 +324,40 @@ class DecisionGate:
             return NAV, self._nav, "passthrough"
         if now - self._heartbeat > cfg.deadman_timeout:
             return DEADMAN, ZERO_TWIST, f"tree heartbeat {now - self._heartbeat:.3f} s old"
+        # twist_mux's rule over the tree, navigation and the extra inputs (twist_mux.py): the
+        # highest priority among the fresh inputs that no lock masks; ties: tree, navigation,
+        # then the extra inputs by name. A tree command set but not refreshed holds its rank
+        # with zero until cleared, so a node that stopped refreshing cannot hand over to navigation.
+        mux = self.mux
+        lock_priority, lock_name = mux.lock(now) if mux.locks else (0, "")
         nav_fresh = self._nav_allowed and now - self._nav_stamp <= cfg.nav_stale_timeout
-        if nav_fresh and cfg.priorities["nav"] > cfg.priorities["tree"]:  # configured: navigation first
-            return NAV, self._nav, "navigation command (priority over the tree)"
-        tree = self._tree
-        if tree is not None:
-            if now - self._tree_stamp <= cfg.tree_stale_timeout:
-                return TREE, tree, "tree command"
-            return IDLE, ZERO_TWIST, "tree command stale"
+        p_tree, p_nav = cfg.priorities["tree"], cfg.priorities["nav"]
+        best: tuple[int, str, Twist, str] | None = None
+        masked: list[str] = []
+        if self._tree is not None:
+            if p_tree < lock_priority:
+                masked.append(TREE)
+            elif now - self._tree_stamp <= cfg.tree_stale_timeout:
+                best = (p_tree, TREE, self._tree, "tree command")
+            else:
+                best = (p_tree, IDLE, ZERO_TWIST, "tree command stale")
+        if nav_fresh:
+            if p_nav < lock_priority:
+                masked.append(NAV)
+            elif best is None or p_nav > best[0]:
+                best = (p_nav, NAV, self._nav, "navigation command" if self._tree is None
+                        else "navigation command (priority over the tree)")
+        if mux.inputs:
+            entry: MuxInput | None = mux.best(now, max(lock_priority - 1, best[0] if best else 0))
+            if entry is not None:
+                best = (entry.priority, entry.name, entry.command, f"{entry.name} input (priority {entry.priority})")
+            masked += mux.masked(now, lock_priority)
+        if best is not None:
+            return best[1], best[2], best[3]
+        if masked:
+            return LOCK, ZERO_TWIST, f"{mux.lock_reason(now, lock_name)} masks {', '.join(masked)}"
         if not self._nav_allowed:
             return IDLE, ZERO_TWIST, f"navigation blocked: {self._nav_block_reason}"
-        if now - self._nav_stamp <= cfg.nav_stale_timeout:
-            return NAV, self._nav, "navigation command"
         return IDLE, ZERO_TWIST, "no fresh command"
 
     def _apply(self, now: float) -> None:

@@ -17,6 +17,7 @@ import pytest
 from bt_runtime.runtime.app import AutonomyRuntime
 from bt_runtime.runtime.driver import RobotDriver
 from bt_runtime.runtime.messages import Contact, RobotInfo
+from bt_runtime.runtime.twist_mux import INPUT_STREAM, LOCK_STREAM
 from sim.driver import ROBOT_STREAMS, SimDriver
 from tests.paths import ROOT
 
@@ -117,7 +118,8 @@ async def test_the_running_layer_receives_only_robot_streams():
     inner.sim.faults.push(0.8, 0.0)  # a collision, so the collision branch runs too
     await asyncio.sleep(4.0)
     await rt.stop()
-    assert driver.streams and all(s in ROBOT_STREAMS or s.startswith("heartbeat/") for s in driver.streams)
+    robot_prefixes = ("heartbeat/", INPUT_STREAM, LOCK_STREAM)  # the gate's teleop input and e-stop lock
+    assert driver.streams and all(s in ROBOT_STREAMS or s.startswith(robot_prefixes) for s in driver.streams)
     assert {"bumper", "imu", "battery", "pose"} <= driver.streams
     assert not driver.types & {"GroundTruth", "SimEvent", "ComponentLogEntry"}
     assert "Contact" in driver.types

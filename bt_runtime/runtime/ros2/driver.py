@@ -83,6 +83,7 @@ class Ros2Driver:
         self._diagnostics_writer: Any = None
         self.send_errors = 0
         self.goal_server: Any = None  # action_server.GoalActionServer once serve_goals() ran
+        self._mux_topics: tuple[list, list] = ([], [])  # the gate's extra inputs and locks
 
     # -- lifecycle -------------------------------------------------------------------------------
     async def start(self) -> None:
@@ -111,6 +112,7 @@ class Ros2Driver:
                 continue
             self._readers[stream] = node.subscription(topic.name, msg_type, _qos(topic.qos),
                                                       self._stream_handler(stream, convert))
+        self._open_mux_topics()
         cmd = t.cmd_vel
         self._cmd_type = idl.TwistStamped if cmd.stamped else idl.Twist
         self._cmd_writer = node.publisher(cmd.name, self._cmd_type, _qos(cmd.qos))
@@ -142,6 +144,8 @@ class Ros2Driver:
             self._poller = None
         node, self.node = self.node, None
         self._cmd_writer = None
+        for stream in [s for s in self._readers if s.startswith(("cmd_vel_input/", "lock/"))]:
+            del self._readers[stream]  # closed with the node; reopened by the next start
         node.close()
         log.info("ros2_driver_stopped", received=dict(self.received), dropped=self.dropped_counts())
 
@@ -155,6 +159,38 @@ class Ros2Driver:
         intake.feedback_period = 1.0 / cfg.feedback_hz
         self.goal_server = GoalActionServer(self.node, intake, action=cfg.action, topic=cfg.topic,
                                             map_frame=self.config.navigation.map_frame)
+
+    # -- the gate's extra inputs and locks (twist_mux) --------------------------------------------
+    def open_command_inputs(self, inputs: list, locks: list) -> None:
+        """Read the gate's extra velocity inputs (geometry_msgs/Twist, or TwistStamped when the
+        input says ``stamped``) and its locks (std_msgs/Bool) from their topics, as the streams
+        ``cmd_vel_input/<name>`` (Twist; non-finite or absurd commands are dropped and counted)
+        and ``lock/<name>`` (bool). Best-effort readers, so any publisher matches."""
+        self._mux_topics = (list(inputs), list(locks))
+        if self.node is not None:
+            self._open_mux_topics()
+
+    def _open_mux_topics(self) -> None:
+        from ..twist_mux import INPUT_STREAM, LOCK_STREAM
+
+        node, conv = self.node, self.conv
+        qos = dds.QosProfile(reliable=False, depth=10)
+        inputs, locks = self._mux_topics
+        for entry in inputs:
+            stream = INPUT_STREAM + entry.name
+            if stream in self._readers:
+                continue
+            convert = (lambda m, now: conv.twist(m.twist, now)) if entry.stamped else conv.twist
+            self._readers[stream] = node.subscription(entry.topic, idl.TwistStamped if entry.stamped else idl.Twist,
+                                                      qos, self._stream_handler(stream, convert))
+        for lock in locks:
+            stream = LOCK_STREAM + lock.name
+            if stream not in self._readers:
+                self._readers[stream] = node.subscription(lock.topic, idl.Bool, qos,
+                                                          self._stream_handler(stream, lambda m, now: bool(m.data)))
+        if inputs or locks:
+            log.info("ros2_gate_inputs", inputs={e.name: node.fq(e.topic) for e in inputs},
+                     locks={lk.name: node.fq(lk.topic) for lk in locks})
 
     # -- streams ---------------------------------------------------------------------------------
     def _stream_handler(self, stream: str, convert: Callable[[Any, float], Any]) -> Callable[[list, float], None]:
