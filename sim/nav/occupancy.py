@@ -5,7 +5,7 @@ origin (the *bottom* of the picture), values 0 (free), 100 (occupied), -1 (unkno
 "scale" mode, 1..99 in between. The cell ``(row, col)`` covers
 ``[ox + col*res, ox + (col+1)*res) x [oy + row*res, oy + (row+1)*res)``.
 
-The map_server format is a picture (PGM here) plus a YAML file with ``image``, ``resolution``,
+The map_server format (read by ``map_file.py``) is a picture plus a YAML file with ``image``, ``resolution``,
 ``origin`` [x, y, yaw], ``negate``, ``occupied_thresh``, ``free_thresh`` and optionally ``mode``
 (trinary | scale | raw). Loading follows ``nav2_map_server/map_io.cpp``: with p = (255 - pixel)/255
 (or pixel/255 when ``negate``), p >= occupied_thresh is occupied, p <= free_thresh is free,
@@ -25,11 +25,11 @@ import numpy as np
 import structlog
 import yaml
 
+from .map_file import FREE, OCCUPIED, UNKNOWN, pixels_to_occupancy, read_map, read_pgm
+
 log = structlog.get_logger("sim.nav.occupancy")
 
-FREE = 0
-OCCUPIED = 100
-UNKNOWN = -1
+__all__ = ["FREE", "OCCUPIED", "UNKNOWN", "OccupancyGrid", "pixels_to_occupancy", "read_pgm", "write_pgm"]
 
 
 @dataclass(slots=True)
@@ -230,36 +230,10 @@ class OccupancyGrid:
     # -- ROS map_server format ------------------------------------------------------------
     @classmethod
     def load(cls, yaml_path: str | Path) -> OccupancyGrid:
-        """Load a map_server map (YAML + PGM)."""
-        yaml_path = Path(yaml_path)
-        meta = yaml.safe_load(yaml_path.read_text())
-        if not isinstance(meta, dict):
-            raise ValueError(f"{yaml_path}: not a map YAML (expected a mapping)")
-        missing = [k for k in ("image", "resolution", "origin", "occupied_thresh", "free_thresh")
-                   if k not in meta]
-        if missing:
-            raise ValueError(f"{yaml_path}: missing key(s) {', '.join(missing)}")
-        image = Path(str(meta["image"]))
-        if not image.is_absolute():
-            image = yaml_path.parent / image
-        folder = yaml_path.parent.resolve()
-        if not image.resolve().is_relative_to(folder):  # a map file must not point the loader elsewhere
-            raise ValueError(f"{yaml_path}: image: {meta['image']} is outside the map file's folder {folder}")
-        if not image.exists():
-            alt = yaml_path.with_suffix(image.suffix or ".pgm")
-            if not alt.exists():
-                raise FileNotFoundError(f"{yaml_path}: image {image} not found")
-            log.warning("map_image_fallback", wanted=str(image), using=str(alt))
-            image = alt
-        origin = [float(v) for v in meta["origin"]]
-        if len(origin) != 3:
-            raise ValueError(f"{yaml_path}: origin must have 3 elements, got {origin}")
-        pixels = read_pgm(image)
-        data = pixels_to_occupancy(pixels, negate=bool(int(meta.get("negate", 0))),
-                                   occupied_thresh=float(meta["occupied_thresh"]),
-                                   free_thresh=float(meta["free_thresh"]),
-                                   mode=str(meta.get("mode", "trinary")).lower())
-        return cls(data[::-1].copy(), float(meta["resolution"]), tuple(origin))
+        """Load a map_server map (YAML + PGM/PNG); errors name the file and the field
+        (``map_file.MapFileError``, a ValueError)."""
+        m = read_map(yaml_path)
+        return cls(m.data, m.resolution, m.origin)
 
     def save(self, yaml_path: str | Path, image: str | None = None) -> Path:
         """Save as map_server trinary PGM + YAML (like ``map_saver_cli``). Returns the YAML path."""
@@ -285,61 +259,6 @@ class OccupancyGrid:
         }
         yaml_path.write_text(yaml.safe_dump(meta, sort_keys=False, default_flow_style=None))
         return yaml_path
-
-
-def pixels_to_occupancy(pixels: np.ndarray, *, negate: bool, occupied_thresh: float,
-                        free_thresh: float, mode: str = "trinary") -> np.ndarray:
-    """Picture rows (top first) to occupancy values, as nav2_map_server does."""
-    if mode == "raw":
-        out = pixels.astype(np.int16)
-        out[(out < 0) | (out > 100)] = UNKNOWN
-        return out.astype(np.int8)
-    if mode not in ("trinary", "scale"):
-        raise ValueError(f"unknown map mode {mode!r} (trinary, scale or raw)")
-    p = pixels.astype(np.float32) / 255.0
-    if not negate:
-        p = 1.0 - p
-    out = np.full(pixels.shape, UNKNOWN, np.int8)
-    if mode == "scale":
-        between = (p > free_thresh) & (p < occupied_thresh)
-        scaled = np.rint((p - free_thresh) / (occupied_thresh - free_thresh) * 100.0)
-        out[between] = scaled[between].astype(np.int8)
-    out[p >= occupied_thresh] = OCCUPIED
-    out[p <= free_thresh] = FREE
-    return out
-
-
-def read_pgm(path: str | Path) -> np.ndarray:
-    """Read a binary (P5) or ASCII (P2) PGM into a uint8 array (rows top first)."""
-    raw = Path(path).read_bytes()
-    tokens: list[bytes] = []
-    i, n = 0, len(raw)
-    while len(tokens) < 4:
-        while i < n and raw[i:i + 1].isspace():
-            i += 1
-        if i >= n:
-            raise ValueError(f"{path}: truncated PGM header")
-        if raw[i:i + 1] == b"#":
-            while i < n and raw[i:i + 1] not in (b"\n", b"\r"):
-                i += 1
-            continue
-        j = i
-        while j < n and not raw[j:j + 1].isspace():
-            j += 1
-        tokens.append(raw[i:j])
-        i = j
-    magic, w, h, maxval = tokens[0], int(tokens[1]), int(tokens[2]), int(tokens[3])
-    if magic == b"P5":
-        i += 1  # exactly one whitespace byte after maxval
-        dtype = np.dtype(">u2") if maxval > 255 else np.dtype(np.uint8)
-        arr = np.frombuffer(raw, dtype=dtype, count=w * h, offset=i).reshape(h, w)
-    elif magic == b"P2":
-        arr = np.array(raw[i:].split()[: w * h], dtype=np.int64).reshape(h, w)
-    else:
-        raise ValueError(f"{path}: not a PGM (magic {magic!r}); only P5/P2 are supported")
-    if maxval != 255:
-        arr = np.rint(arr.astype(np.float64) * (255.0 / maxval))
-    return arr.astype(np.uint8)
 
 
 def write_pgm(path: str | Path, pixels: np.ndarray, comment: str = "") -> None:

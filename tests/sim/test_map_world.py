@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from sim.nav.occupancy import OccupancyGrid
 from sim.world import WorldError, load_world
 from tests.paths import ROOT
 
@@ -68,7 +69,9 @@ def test_without_a_spawn_the_robot_starts_in_open_space(tmp_path: Path) -> None:
     ({"origin": "[1.0, 2.0]"}, "origin"),
     ({"mode": "fancy"}, "mode"),
     ({"image": "../elsewhere.png"}, "image"),
-    ({"image": "missing.png"}, "image"),
+    ({"image": "missing.pgm"}, "image"),  # no room.pgm beside room.yaml to fall back on either
+    ({"negate": "maybe"}, "negate"),
+    ({"occupied_thresh": ".nan"}, "occupied_thresh"),
     ({"free_thresh": 0.9}, "free_thresh/occupied_thresh"),
 ])
 def test_bad_map_files_name_the_file_and_field(tmp_path: Path, keys: dict, field: str) -> None:
@@ -76,6 +79,15 @@ def test_bad_map_files_name_the_file_and_field(tmp_path: Path, keys: dict, field
     with pytest.raises(WorldError) as err:
         load_world(path)
     assert str(path) in str(err.value) and field in str(err.value)
+
+
+def test_a_renamed_picture_falls_back_to_the_one_named_like_the_map(tmp_path: Path) -> None:
+    """One reader for worlds and the navigation grid: both accept the same files."""
+    path = _write_map(tmp_path, _room(), image="old_name.png", spawn="{x: 0.5, y: -1.0, yaw: 0}")
+    world = load_world(path)
+    grid = OccupancyGrid.load(path)
+    assert _inside_any(world, 1.25, -0.75) and grid.value_at(1.25, -0.75) == 100
+    assert grid.value_at(0.5, -1.0) == 0
 
 
 def test_the_shipped_map_matches_the_apartment() -> None:
