@@ -133,6 +133,8 @@ class Recorder:
         if topics.cmd_vel:
             put("command", topics.cmd_vel, now, twist)
         own = GATE_SOURCE_TOPIC.get(source)
+        if own is None and source in self.runtime.gate.mux.inputs:  # any configured gate input (joystick...)
+            own = source
         if own is not None:
             topic = self._source_topic(own)
             if topic:  # the source's own command, before the gate's limits
