@@ -7,8 +7,8 @@ base (``cmd_vel_out``), and learns one factor ``scale``: the energy the state of
 was used, over the energy the nominal model predicts for the same commands. It is a Gaussian
 estimate: a prior N(1, ``prior_sigma``) from the nominal values, combined with the
 measurement, whose uncertainty shrinks as more energy is used. Predictions carry a margin of
-``margin_sigmas`` standard deviations. Charging (the state of charge rising) restarts the
-measurement window.
+``margin_sigmas`` standard deviations. Charging (the monitor reports a charger, or the state of
+charge rises) restarts the measurement window.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ class EnergyModel:
             return
         self._advance(now)
         self.readings += 1
-        rising = self._last_soc is not None and soc > self._last_soc + 4 * self.soc_sigma
+        rising = msg.on_charger or (self._last_soc is not None and soc > self._last_soc + 4 * self.soc_sigma)
         self._last_soc = soc
         if self._start_soc is None or rising:  # first reading, or charging: a new window
             self._start_soc, self._nominal_wh, self._volts = soc, 0.0, []

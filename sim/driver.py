@@ -59,7 +59,8 @@ class SimDriver:
         robot_params = robot_params_for(self.sim)
         if max_angular_speed is not None:
             robot_params = robot_params.model_copy(update={"max_angular_vel": max_angular_speed})
-        self.navigation = NavStack(self.sim.bus, grid, robot=robot_params, params=nav_params)
+        docks = {"home_dock": self.sim.dock} if self.sim.dock is not None else {}  # the docking server's database
+        self.navigation = NavStack(self.sim.bus, grid, robot=robot_params, params=nav_params, docks=docks)
         self.navigation.on_component_event = self.sim.log_component
         if cruise_speed is not None:
             self.navigation.set_desired_speed(cruise_speed)

@@ -238,7 +238,7 @@ class SimRobot:
                                 current=-m.current,
                                 charge=math.nan, capacity=m.capacity_ah, design_capacity=m.capacity_ah,
                                 percentage=m.percentage / 100.0, present=True,
-                                power_supply_status=1 if m.current < 0 else 2)
+                                power_supply_status=m.power_supply_status)
 
     @staticmethod
     def _twist(m: Any) -> idl.Twist:

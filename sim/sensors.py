@@ -18,6 +18,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bt_runtime.runtime.messages import (
+    POWER_SUPPLY_CHARGING,
+    POWER_SUPPLY_DISCHARGING,
+    POWER_SUPPLY_FULL,
     BatteryState,
     Contact,
     Imu,
@@ -256,10 +259,16 @@ class BumperDriver(Driver):
 # ---------------------------------------------------------------------------------------------
 class BatteryModel:
     """The battery's truth: state of charge integrated every physics step (it drains whether or
-    not its driver publishes), charging while docked (within ``dock_radius`` of the dock, not
-    moving). This robot's consumption constants differ from the profile's nominal values by up
-    to ``variation`` (drawn once per run from the seed), as two units of one model do; the
-    autonomy layer is told only the nominal values."""
+    not its driver publishes). This robot's consumption constants differ from the profile's
+    nominal values by up to ``variation`` (drawn once per run from the seed), as two units of
+    one model do; the autonomy layer is told only the nominal values.
+
+    Charging: while the robot's contacts touch the dock's (``sim.dock.Dock.touching``) the
+    charger powers the robot and puts ``charge_power_w`` into the battery, so the state of
+    charge rises by ``charge_power_w / V / 3600 / capacity_ah * 100`` % per second (V the
+    battery's voltage at that charge) up to 100 %. Events ``docked`` / ``undocked`` (contacts)
+    and ``charging_started`` / ``charging_stopped`` (with the true state of charge) are
+    recorded for judging."""
 
     variation = 0.10
 
@@ -275,12 +284,19 @@ class BatteryModel:
         self.extra_power = 0.0  # W, the drain fault
         self.extra_until = math.inf
         self.power = self.idle_power_w
-        self.charging = False
-        self.dock_radius = 0.25
+        self.docked = False  # contacts touch (truth)
+        self.charging = False  # current flows in (docked and not full)
         self.depleted = self.soc <= 0.0
 
     def voltage(self) -> float:
         return self.spec.voltage(self.soc)
+
+    def _contacts_touch(self) -> bool:
+        dock = self.sim.dock_contacts
+        if dock is None:
+            return False
+        phys = self.sim.physics
+        return dock.touching(phys.x, phys.y, phys.angle)
 
     def integrate(self, v: float, w: float, dt: float, now: float) -> None:
         spec = self.spec
@@ -288,17 +304,16 @@ class BatteryModel:
             self.extra_power = 0.0
             self.extra_until = math.inf
         power = self.idle_power_w + self.k_linear * abs(v) + self.k_angular * abs(w) + self.extra_power
-        dock = self.sim.dock
-        charging = False
-        if dock is not None and v == 0.0 and w == 0.0:
-            phys = self.sim.physics
-            x, y = phys.x, phys.y
-            charging = (x - dock.x) ** 2 + (y - dock.y) ** 2 <= self.dock_radius ** 2
+        docked = self._contacts_touch()
+        if docked != self.docked:
+            self.docked = docked
+            self.sim.record_event("docked" if docked else "undocked", soc=self.soc)
+        charging = docked and self.soc < 100.0
         if charging != self.charging:
             self.charging = charging
             self.sim.record_event("charging_started" if charging else "charging_stopped", soc=self.soc)
         self.power = power
-        net = power - spec.charge_power_w if charging else power
+        net = -spec.charge_power_w if docked else power  # on the dock the charger powers the robot
         volts = spec.voltage_empty + (spec.voltage_full - spec.voltage_empty) * self.soc * 0.01
         self.soc = soc_after(self.soc, net, volts, spec.capacity_ah, dt)
         if self.soc <= 0.0 and not self.depleted:
@@ -312,7 +327,8 @@ class BatteryModel:
 class BatteryDriver(Driver):
     """A battery monitor as small robots have: voltage and state of charge, both with
     measurement noise; no current or power sensor (NaN), except the charger's current while
-    docked (negative: flowing in)."""
+    docked (negative: flowing in); ``power_supply_status`` CHARGING while the charger's current
+    flows, FULL on the charger at 100 %, DISCHARGING otherwise."""
 
     voltage_sigma = 0.02  # V
     soc_sigma = 0.1  # percentage points
@@ -328,13 +344,17 @@ class BatteryDriver(Driver):
         volts = m.voltage() + self.voltage_sigma * nz()
         soc = min(max(m.soc + self.soc_sigma * nz(), 0.0), 100.0)
         current = -m.spec.charge_power_w / volts if m.charging else math.nan
-        return BatteryState(now, volts, soc, current, math.nan, m.spec.capacity_ah)
+        status = (POWER_SUPPLY_CHARGING if m.charging else POWER_SUPPLY_FULL if m.docked
+                  else POWER_SUPPLY_DISCHARGING)
+        return BatteryState(now, volts, soc, current, math.nan, m.spec.capacity_ah, status)
 
     def corrupt(self, msg: BatteryState, mode: str) -> BatteryState:
         if mode == "nan":
-            return BatteryState(msg.stamp, math.nan, math.nan, math.nan, math.nan, msg.capacity_ah)
+            return BatteryState(msg.stamp, math.nan, math.nan, math.nan, math.nan, msg.capacity_ah,
+                                msg.power_supply_status)
         g = self.garbage
-        return BatteryState(msg.stamp, abs(g(30.0)), g(300.0), g(20.0), g(100.0), msg.capacity_ah)
+        return BatteryState(msg.stamp, abs(g(30.0)), g(300.0), g(20.0), g(100.0), msg.capacity_ah,
+                            msg.power_supply_status)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -41,6 +41,7 @@ from bt_runtime.runtime.messages import ComponentInfo, ComponentState, Pose2D, T
 from .bus import Bus
 from .component_log import ComponentLogEntry
 from .components import ACTIVE, Component
+from .dock import Dock
 from .faults import FaultInjector
 from .geometry import RayCaster, wrap_angle
 from .localization import LocalizationDriver
@@ -119,6 +120,7 @@ class Simulator:
             sp = Pose2D(*options.spawn)
         self.spawn = sp
         self.dock = self.world.dock.to_pose() if self.world.dock else None
+        self.dock_contacts = Dock(self.dock) if self.dock is not None else None  # truth: when contacts touch
 
         # physics and obstacles ------------------------------------------------------------
         self.physics = PhysicsWorld(self.profile, sp.x, sp.y, sp.yaw, substeps=options.substeps,

@@ -76,6 +76,16 @@ class NavigationClient(Protocol):
 
     def wait(self, duration: float) -> NavigationHandle: ...
 
+    def dock_robot(self, *, use_dock_id: bool = True, dock_id: str = "", dock_pose: Pose2D | None = None,
+                   dock_type: str = "", max_staging_time: float = 1000.0, navigate_to_staging_pose: bool = True,
+                   feedback: Callable[[Any], None] | None = None) -> NavigationHandle:
+        """opennav_docking's ``dock_robot``: staging pose, approach, charging sensed from the
+        battery. The result's ``error_code`` is DockRobot's (901-907, 999), ``num_retries`` set;
+        feedback is ``DockFeedback``."""
+
+    def undock_robot(self, *, dock_type: str = "", max_undocking_time: float = 30.0) -> NavigationHandle:
+        """opennav_docking's ``undock_robot``: back out to the staging pose (902, 905, 999)."""
+
     def cancel_all(self) -> None:
         """Cancel every running navigation action (the controller stops publishing)."""
 

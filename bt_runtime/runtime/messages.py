@@ -116,14 +116,28 @@ class Contact:
     direction: float = math.nan
 
 
+# sensor_msgs/BatteryState power_supply_status values
+POWER_SUPPLY_UNKNOWN, POWER_SUPPLY_CHARGING, POWER_SUPPLY_DISCHARGING = 0, 1, 2
+POWER_SUPPLY_NOT_CHARGING, POWER_SUPPLY_FULL = 3, 4
+
+
 @dataclass(slots=True)
 class BatteryState:
+    """A battery monitor's reading. ``power_supply_status`` is sensor_msgs' (0 unknown,
+    1 charging, 2 discharging, 3 not charging, 4 full): how a robot learns it is on its charger."""
+
     stamp: float
     voltage: float
     percentage: float  # state of charge, 0..100
     current: float = 0.0  # A, positive when discharging
     power: float = 0.0  # W being drawn
     capacity_ah: float = 0.0
+    power_supply_status: int = POWER_SUPPLY_UNKNOWN
+
+    @property
+    def on_charger(self) -> bool:
+        """The monitor says a charger is connected (charging, or full on the charger)."""
+        return self.power_supply_status in (POWER_SUPPLY_CHARGING, POWER_SUPPLY_FULL)
 
 
 @dataclass(slots=True)
@@ -195,6 +209,7 @@ class NavResult:
     error_code: NavErrorCode = NavErrorCode.NONE
     error_msg: str = ""
     path: Path | None = None  # compute_path_to_pose returns the path here
+    num_retries: int = 0  # dock_robot: the retries the docking server used
 
     @property
     def succeeded(self) -> bool:
@@ -209,6 +224,17 @@ class NavFeedback:
     navigation_time: float = 0.0
     number_of_recoveries: int = 0
     speed: float = 0.0
+
+
+@dataclass(slots=True)
+class DockFeedback:
+    """dock_robot's feedback (nav2_msgs/action/DockRobot): ``state`` 1 NAV_TO_STAGING_POSE,
+    2 INITIAL_PERCEPTION, 3 CONTROLLING, 4 WAIT_FOR_CHARGE, 5 RETRY; seconds since the start."""
+
+    stamp: float
+    state: int
+    docking_time: float = 0.0
+    num_retries: int = 0
 
 
 # ---------------------------------------------------------------------------------------------

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from . import actions, conditions, control, decorators, path_ops, services, unavailable
+from . import actions, conditions, control, decorators, docking, path_ops, services, unavailable
 from .common import publish, publish_stamped
 
 if TYPE_CHECKING:
@@ -104,13 +104,14 @@ NAV2_NODES: dict[str, type] = {
     "GetCurrentPose": path_ops.GetCurrentPose,
     "AppendGoalPoseToGoals": path_ops.AppendGoalPoseToGoals,
     "GetNextFewGoals": path_ops.GetNextFewGoals,
+    # docking server (opennav_docking)
+    "DockRobot": docking.DockRobot,
+    "UndockRobot": docking.UndockRobot,
     # no server in this stack: load, fail when ticked
     "ComputeRoute": unavailable.ComputeRoute,
     "ComputeAndTrackRoute": unavailable.ComputeAndTrackRoute,
     "CancelComputeAndTrackRoute": unavailable.CancelComputeAndTrackRoute,
     "ExtractRouteNodesAsGoals": unavailable.ExtractRouteNodesAsGoals,
-    "DockRobot": unavailable.DockRobot,
-    "UndockRobot": unavailable.UndockRobot,
     "AssistedTeleop": unavailable.AssistedTeleop,
     "CancelAssistedTeleop": unavailable.CancelAssistedTeleop,
     "FollowObject": unavailable.FollowObject,

@@ -10,6 +10,7 @@ from typing import Any, ClassVar
 
 from bt_runtime.node import ConditionNode, NodeConfig
 from bt_runtime.ports import BOOL, DOUBLE, STRING, input_port
+from bt_runtime.runtime.messages import POWER_SUPPLY_CHARGING, POWER_SUPPLY_UNKNOWN
 from bt_runtime.status import FAILURE, IDLE, SUCCESS, NodeStatus
 
 from ..robot import latest, navigation, robot_pose
@@ -292,8 +293,9 @@ class IsBatteryLow(ConditionNode):
 
 
 class IsBatteryCharging(ConditionNode):
-    """SUCCESS if the last battery message says the battery is charging (current < 0: power
-    flowing in; ROS: ``power_supply_status == CHARGING``)."""
+    """SUCCESS if the last battery message says the battery is charging: ``power_supply_status
+    == CHARGING`` (Nav2's test); a monitor that reports no status (UNKNOWN) is charging when its
+    current flows in (current < 0)."""
 
     @classmethod
     def provided_ports(cls):
@@ -301,7 +303,12 @@ class IsBatteryCharging(ConditionNode):
 
     def tick(self) -> NodeStatus:
         msg = latest(self, "battery")
-        return _STATUS[msg is not None and msg.current < 0.0]
+        if msg is None:
+            return FAILURE
+        status = getattr(msg, "power_supply_status", POWER_SUPPLY_UNKNOWN)
+        if status != POWER_SUPPLY_UNKNOWN:
+            return _STATUS[status == POWER_SUPPLY_CHARGING]
+        return _STATUS[msg.current < 0.0]
 
 
 class GoalReached(ConditionNode):

@@ -1,5 +1,5 @@
 """Nav2 nodes whose servers the project's navigation stack does not have (route server,
-docking server, assisted teleop, object following, AMCL's global relocalization, the
+assisted teleop, object following, AMCL's global relocalization, the
 collision monitor). They are registered with Nav2's ports so every stock tree loads and
 Groot2 shows the full palette; ticked, they fail at once with the action's UNKNOWN error code
 and a log line saying which server is missing (what a Nav2 BT node does when its server is not
@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 from bt_runtime.node import StatefulActionNode
-from bt_runtime.ports import BOOL, DOUBLE, FLOAT, STRING, input_port, output_port
+from bt_runtime.ports import BOOL, DOUBLE, STRING, input_port, output_port
 from bt_runtime.status import FAILURE, SUCCESS, NodeStatus
 
 from ..types import DURATION, ERROR_CODE, GOALS, PATH, POSE, ROUTE
@@ -93,38 +93,6 @@ class ExtractRouteNodesAsGoals(UnavailableAction):
     def provided_ports(cls):
         return [input_port("route", ROUTE, description="Route to extract the nodes of"),
                 output_port("goals", GOALS, description="The route's nodes as goals")]
-
-
-class DockRobot(UnavailableAction):
-    """opennav_docking ``dock_robot``. No docking server: FAILURE, 999 (UNKNOWN)."""
-
-    server, unknown_code = "dock_robot", 999
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("use_dock_id", BOOL, True, "Whether to use the dock's ID or dock pose fields"),
-                input_port("dock_id", STRING, description="Dock ID or name to use"),
-                input_port("dock_pose", POSE, description="The dock pose, if not using dock id"),
-                input_port("dock_type", STRING, description="The dock plugin type, if using dock pose"),
-                input_port("max_staging_time", FLOAT, 1000.0, "Maximum time to navigate to the staging pose"),
-                input_port("navigate_to_staging_pose", BOOL, True, "Whether to autonomously navigate to "
-                                                                    "staging pose"),
-                output_port("success", BOOL, description="If the action was successful"),
-                output_port("num_retries", ERROR_CODE, description="The number of retries"),
-                *error_ports("Dock robot"), *server_ports("dock_robot")]
-
-
-class UndockRobot(UnavailableAction):
-    """opennav_docking ``undock_robot``. No docking server: FAILURE, 999 (UNKNOWN)."""
-
-    server, unknown_code = "undock_robot", 999
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("dock_type", STRING, description="The dock plugin type"),
-                input_port("max_undocking_time", FLOAT, 30.0, "Maximum time to undock"),
-                output_port("success", BOOL, description="If the action was successful"),
-                *error_ports("Undock robot"), *server_ports("undock_robot")]
 
 
 class AssistedTeleop(UnavailableAction):

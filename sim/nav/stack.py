@@ -50,6 +50,7 @@ from bt_runtime.runtime.messages import (
 from .behaviors import BackUp, Behavior, DriveOnHeading, Spin
 from .controller import GoalChecker, NoValidControl, ProgressChecker, RegulatedPurePursuit
 from .costmap import GlobalCostmap, LocalCostmap
+from .docking import DockingServer
 from .occupancy import OccupancyGrid
 from .params import NavParams, RobotParams
 from .planner import GridPlanner, PlanResult
@@ -211,7 +212,7 @@ class NavStack:
     """Nav2-like navigation on the simulator bus; implements ``NavigationClient``."""
 
     def __init__(self, bus: Any, grid: OccupancyGrid, robot: RobotParams | dict | None = None,
-                 params: NavParams | dict | None = None):
+                 params: NavParams | dict | None = None, docks: dict[str, Pose2D] | None = None):
         self.bus = bus
         self.grid = grid
         self.robot = robot if isinstance(robot, RobotParams) else RobotParams.model_validate(robot or {})
@@ -249,6 +250,7 @@ class NavStack:
         self._unsubs: list[Callable[[], None]] = []
         self._subscribe()
         self.current_plan: Path | None = None
+        self.docking = DockingServer(self, docks)  # opennav_docking's dock_robot / undock_robot
 
     # ------------------------------------------------------------------------------------
     # lifecycle
@@ -518,7 +520,7 @@ class NavStack:
         elif not task.cancelled():
             res = task.result()
             log.debug("nav_action_done", action=handle.kind, status=res.status.value,
-                      code=res.error_code.name, msg=res.error_msg, sim_time=self._sim_time())
+                      code=getattr(res.error_code, "name", res.error_code), msg=res.error_msg, sim_time=self._sim_time())
 
     def navigate_to_pose(self, goal: Pose2D, *, behavior_tree: str = "",
                          feedback: Callable[[NavFeedback], None] | None = None) -> NavHandle:
@@ -556,6 +558,22 @@ class NavStack:
     def wait(self, duration: float) -> NavHandle:
         h = NavHandle("wait")
         return self._launch(h, self._wait(h, duration), motion=False)
+
+    def dock_robot(self, *, use_dock_id: bool = True, dock_id: str = "", dock_pose: Pose2D | None = None,
+                   dock_type: str = "", max_staging_time: float = 1000.0, navigate_to_staging_pose: bool = True,
+                   feedback: Callable[[Any], None] | None = None) -> NavHandle:
+        """opennav_docking's dock_robot (``sim/nav/docking.py``); feedback is ``DockFeedback``."""
+        h = NavHandle("dock_robot", feedback)
+        coro = self.docking.dock_robot(h, use_dock_id=use_dock_id, dock_id=dock_id, dock_pose=dock_pose,
+                                       dock_type=dock_type, max_staging_time=max_staging_time,
+                                       navigate_to_staging_pose=navigate_to_staging_pose)
+        return self._launch(h, coro, motion=True)
+
+    def undock_robot(self, *, dock_type: str = "", max_undocking_time: float = 30.0) -> NavHandle:
+        """opennav_docking's undock_robot: back out to the staging pose."""
+        h = NavHandle("undock_robot")
+        return self._launch(h, self.docking.undock_robot(h, dock_type=dock_type,
+                                                         max_undocking_time=max_undocking_time), motion=True)
 
     def cancel_all(self) -> None:
         for h in list(self._handles):

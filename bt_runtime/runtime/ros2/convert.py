@@ -130,7 +130,7 @@ class Converter:
         capacity = float(m.capacity) if math.isfinite(m.capacity) else 0.0
         # ROS: current is negative while discharging; ours is positive when discharging
         return BatteryState(now, float(m.voltage), float(m.percentage) * 100.0, -current,
-                            float(m.voltage) * -current, capacity)
+                            float(m.voltage) * -current, capacity, int(m.power_supply_status))
 
     def bumper_bool(self, m: idl.Bool, now: float) -> Contact:
         return Contact(now, bool(m.data))

@@ -145,6 +145,12 @@ class FakeNav:
     def navigate_to_pose(self, goal, **kw):
         return self._action("navigate_to_pose", goal, **kw)
 
+    def dock_robot(self, **kw):
+        return self._action("dock_robot", **kw)
+
+    def undock_robot(self, **kw):
+        return self._action("undock_robot", **kw)
+
     async def compute_path_to_pose(self, goal, *, start=None, planner_id="", use_start=False):
         self.calls.append(("compute_path_to_pose", (goal,), {"start": start, "planner_id": planner_id,
                                                               "use_start": use_start}))

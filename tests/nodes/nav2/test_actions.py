@@ -361,8 +361,8 @@ def test_navigate_to_pose_and_through_poses():
 
 
 def test_nodes_without_a_server_fail_with_their_unknown_code():
-    tree, _ = build('<DockRobot dock_id="home" error_code_id="{code}" success="{ok}"/>')
-    assert tree.tick_exactly_once() is FAILURE and bb(tree, "code") == 999 and bb(tree, "ok") is False
+    tree, _ = build('<AssistedTeleop error_code_id="{code}"/>')
+    assert tree.tick_exactly_once() is FAILURE and bb(tree, "code") == 730
     tree, _ = build('<ComputeRoute goal="1;1" error_code_id="{code}"/>')
     assert tree.tick_exactly_once() is FAILURE and bb(tree, "code") == 400
 

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
-from bt_runtime.runtime.messages import Path, Pose2D
+from bt_runtime.runtime.messages import POWER_SUPPLY_CHARGING, POWER_SUPPLY_FULL, BatteryState, Path, Pose2D
 from bt_runtime.status import FAILURE, RUNNING, SUCCESS
 from nodes.types import TrackingFeedback
 from tests.nodes.nav2.support import Counter, build, fake_context
@@ -180,6 +182,11 @@ def test_is_battery_charging():
     ctx.backup.battery(50.0, current=1.2)
     assert tick('<IsBatteryCharging/>', ctx) is FAILURE
     ctx.backup.battery(50.0, current=-0.8)
+    assert tick('<IsBatteryCharging/>', ctx) is SUCCESS
+    # a monitor that reports power_supply_status is believed: FULL on the charger is not charging
+    ctx.backup.record("battery", BatteryState(0.0, 12.6, 100.0, -0.1, 0.0, 0.1, POWER_SUPPLY_FULL))
+    assert tick('<IsBatteryCharging/>', ctx) is FAILURE
+    ctx.backup.record("battery", BatteryState(0.0, 12.0, 80.0, math.nan, 0.0, 0.1, POWER_SUPPLY_CHARGING))
     assert tick('<IsBatteryCharging/>', ctx) is SUCCESS
 
 
