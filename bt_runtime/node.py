@@ -48,7 +48,7 @@ class NodeConfig:
 
     __slots__ = ("blackboard", "enums", "input_ports", "output_ports", "manifest", "uid", "path",
                  "_pre", "_post", "_other", "context", "wake_up", "timers", "clock",
-                 "registration_id", "_file", "_line")
+                 "registration_id", "_file", "_line", "_doc", "_tag")
 
     def __init__(self, blackboard: Blackboard | None = None, *, input_ports: dict[str, str] | None = None,
                  output_ports: dict[str, str] | None = None, enums: dict[str, int] | None = None,
@@ -76,18 +76,22 @@ class NodeConfig:
         self.registration_id = manifest.registration_id if manifest else ""
         self._file: str | None = None
         self._line: int | None = None
+        self._doc = self._tag = None
 
     @classmethod
     def _for_node(cls, blackboard: Blackboard, enums: dict[str, int], manifest: TreeNodeManifest,
                   uid: int, path: str, context: Any, wake_up: WakeUpSignal, timers: TimerQueue,
-                  clock: Callable[[], float], file: str | None,
-                  line: int | Callable[[], int | None] | None) -> NodeConfig:
+                  clock: Callable[[], float], doc: Any, sourceline: int | None, tag: str) -> NodeConfig:
         """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
         positional arguments (much cheaper than the keyword call, once per node).
 
         A node type that declares no ports can never have port remappings: its
         ``input_ports``/``output_ports`` are one shared, read-only empty mapping (two dicts
-        fewer per node; most nodes of a tree are of such types)."""
+        fewer per node; most nodes of a tree are of such types).
+
+        The source line is kept as the parser's raw ``sourceline`` with its document and tag,
+        resolved to the line of the start tag only if someone asks (``source``): no per-node
+        object and no reference to the lxml element."""
         self = _new_object(cls)
         self.blackboard = blackboard
         self.enums = enums
@@ -105,22 +109,26 @@ class NodeConfig:
         self.timers = timers
         self.clock = clock
         self.registration_id = manifest.registration_id
-        self._file = file
-        self._line = line
+        self._file = doc.file
+        self._line = sourceline
+        self._doc = doc
+        self._tag = tag
         return self
 
     @property
     def source(self) -> tuple[str | None, int | None]:
-        """(file, line) of the node's element, for messages. The builder may give the line as
-        a function: finding it costs a text search, done only if someone asks."""
-        line = self._line
-        if callable(line):
-            line = self._line = line()
-        return (self._file, line)
+        """(file, line) of the node's element, for messages. The builder gives the parser's
+        raw line: finding the start tag's line costs a text search, done only if someone asks."""
+        doc = self._doc
+        if doc is not None:
+            self._line = doc.line_at(self._tag, self._line)
+            self._doc = self._tag = None
+        return (self._file, self._line)
 
     @source.setter
     def source(self, value: tuple[str | None, int | None]) -> None:
         self._file, self._line = value
+        self._doc = self._tag = None
 
     @property
     def pre_conditions(self) -> dict[str, Any]:

@@ -25,7 +25,7 @@ MAX_TREE_DEPTH = 256  # node levels, SubTrees expanded (as the XML nesting limit
 
 
 @dataclass(slots=True)
-class _Shape:
+class Shape:
     """One definition: its deepest plain element and its SubTree elements, with their depth."""
 
     plain_depth: int
@@ -41,7 +41,7 @@ class _Depth:
     via: str | None  # the SubTree ID that element expands, if any
 
 
-def _shape(definition: TreeDefinition) -> _Shape:
+def _shape(definition: TreeDefinition) -> Shape:
     root = definition.root_element
     best, best_elem = 1, root
     subtrees: list[tuple[str, etree._Element, int]] = []
@@ -53,11 +53,12 @@ def _shape(definition: TreeDefinition) -> _Shape:
         elif depth > best:
             best, best_elem = depth, elem
         stack.extend((child, depth + 1) for child in elem if isinstance(child.tag, str))
-    return _Shape(best, best_elem, subtrees)
+    return Shape(best, best_elem, subtrees)
 
 
-def _cached_shape(definition: TreeDefinition) -> _Shape:
-    """A definition's shape never changes: walk its elements once per definition."""
+def _cached_shape(definition: TreeDefinition) -> Shape:
+    """A definition's shape never changes: the registry notes it while checking the document
+    (document.py); a definition made another way is walked once."""
     shape = getattr(definition, "_depth_shape", None)
     if shape is None:
         shape = _shape(definition)

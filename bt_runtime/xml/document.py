@@ -18,6 +18,7 @@ from lxml import etree
 from ..errors import XMLLoadError
 from ..ports import RESERVED_ATTRIBUTES, PortInfo, find_forbidden_char, port_type
 from ..status import NodeType, PortDirection
+from .depth import Shape
 from .reader import ELEMENT, XMLDocument, element_children, parse_xml_text, read_xml_file
 from .v3 import BTFormatWarning, is_v3, translate_v3
 
@@ -166,10 +167,15 @@ class TreeRegistry:
             ids.append(tree_id)
 
         # Validate every tree before registering any, so a bad document changes nothing.
+        shapes = []
         for bt in tree_elements:
-            self._check_node(doc, element_children(bt)[0], 1, parent=None)
-        for bt, tree_id in zip(tree_elements, ids):
-            self.trees[tree_id] = TreeDefinition(tree_id, bt, doc)
+            root_elem = element_children(bt)[0]
+            shape = Shape(1, root_elem, [])
+            self._check_node(doc, root_elem, 1, None, shape)
+            shapes.append(shape)
+        for bt, tree_id, shape in zip(tree_elements, ids, shapes):
+            definition = self.trees[tree_id] = TreeDefinition(tree_id, bt, doc)
+            definition._depth_shape = shape  # type: ignore[attr-defined]  # see depth.py
         new_ids = [i for i in ids if i not in before]
         return LoadResult(new_ids, ids, main_tree, doc)
 
@@ -232,7 +238,9 @@ class TreeRegistry:
 
     # -- per-tree validation (spec 2.8) ----------------------------------------------------------
     def _check_node(self, doc: XMLDocument, elem: etree._Element, depth: int,
-                    parent: etree._Element | None) -> None:
+                    parent: etree._Element | None, shape: Shape) -> None:
+        """Check one element and its children; note in ``shape`` its SubTrees and the
+        deepest other element (what the expanded-depth check needs, without a walk of its own)."""
         if depth > MAX_DEPTH:
             raise self._err(doc, elem, f"Maximum XML nesting depth exceeded (limit: {MAX_DEPTH}). "
                                        "The XML is too deeply nested.")
@@ -250,7 +258,11 @@ class TreeRegistry:
             if sub_id in manifests:
                 raise self._err(doc, elem, "The attribute [ID] of tag <SubTree> must not use the name of "
                                            "a registered Node")
+            shape.subtrees.append((sub_id, elem, depth))
             return
+        if depth >= shape.plain_depth:  # (the last deepest, as depth.py's own walk finds)
+            shape.plain_depth = depth
+            shape.plain_elem = elem
         explicit = tag in EXPLICIT_TAG_SET
         if explicit:
             type_id = elem.get("ID")
@@ -280,7 +292,7 @@ class TreeRegistry:
         if children and node_type in _LEAF_TYPES:
             raise self._err(doc, elem, f"The node '{type_id}' must not have any child")
         for child in children:
-            self._check_node(doc, child, depth + 1, elem)
+            self._check_node(doc, child, depth + 1, elem, shape)
 
     def _check_reactive_children(self, doc: XMLDocument, elem: etree._Element,
                                  children: list[etree._Element]) -> None:

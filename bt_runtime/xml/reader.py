@@ -48,10 +48,13 @@ class XMLDocument:
 
     def line_of(self, element: etree._Element) -> int | None:
         """The line in the original text where the element's start tag begins."""
-        line = element.sourceline
-        if line is None:
+        return self.line_at(element.tag, element.sourceline)
+
+    def line_at(self, tag: object, sourceline: int | None) -> int | None:
+        """``line_of`` from an element's tag and lxml ``sourceline`` (what nodes keep)."""
+        if sourceline is None:
             return None
-        return self._tag_start_line(element.tag, self.original_line(line))
+        return self._tag_start_line(tag, self.original_line(sourceline))
 
     def _tag_start_line(self, tag: object, end_line: int) -> int:
         """libxml2 numbers an element by the line where its start tag *ends*; walk back to the

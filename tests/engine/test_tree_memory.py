@@ -52,3 +52,24 @@ def test_loading_restores_the_collector_state() -> None:
         assert not gc.isenabled()
     finally:
         gc.enable()
+
+
+def test_a_built_tree_is_not_left_to_the_young_collections() -> None:
+    """Its objects start in the oldest generation: the next young collections do not traverse
+    the whole new tree (they cost as much as the build)."""
+    tree = _factory().create_tree("Main")
+    young = {id(obj) for generation in (0, 1) for obj in gc.get_objects(generation)}
+    nodes = [node for record in tree.subtrees for node in record.nodes]
+    assert len(nodes) > 100
+    assert not any(id(node) in young or id(node._cell) in young or id(node.config) in young for node in nodes)
+
+
+def test_loading_keeps_the_applications_frozen_objects_frozen() -> None:
+    factory = _factory()
+    gc.freeze()
+    try:
+        frozen = gc.get_freeze_count()
+        factory.create_tree("Main")
+        assert gc.get_freeze_count() == frozen
+    finally:
+        gc.unfreeze()

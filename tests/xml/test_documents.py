@@ -238,3 +238,17 @@ def test_nav2_jazzy_tree_loads_without_warning():
         warnings.simplefilter("error")
         tree = factory.create_tree_from_file(NAV2 / "jazzy" / "navigate_to_pose_w_replanning_and_recovery.xml")
     assert len(list(tree.nodes())) > 20
+
+
+def test_a_node_knows_the_file_and_line_of_its_start_tag(tmp_path: Path) -> None:
+    """``node.config.source`` (what validate reports): the line where the start tag begins,
+    even when the tag spans lines or a script attribute had to be escaped."""
+    path = write(tmp_path / "t.xml", '<root BTCPP_format="4">\n<BehaviorTree ID="Main">\n<Sequence>\n'
+                 '  <Script code="a := 1"/>\n  <Script\n     code="b := a < 2"\n     name="two"/>\n'
+                 '  <Action ID="AlwaysSuccess"\n   name="three"/>\n</Sequence>\n</BehaviorTree>\n</root>\n')
+    tree = BehaviorTreeFactory().create_tree_from_file(path)
+    by_name = {node.name: node.config.source for node in tree.nodes()}
+    assert by_name["Sequence"] == (str(path), 3)
+    assert by_name["Script"] == (str(path), 4)
+    assert by_name["two"] == (str(path), 5)
+    assert by_name["three"] == (str(path), 8)
