@@ -10,6 +10,7 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``imu`` | sensor_msgs/Imu | IMU |
 | ``odom`` | nav_msgs/Odometry | wheel odometry |
 | ``amcl_pose`` | geometry_msgs/PoseWithCovarianceStamped (transient local) | localization |
+| ``map`` | nav_msgs/OccupancyGrid (reliable, transient local: late joiners get it) | the world, as map_server |
 | ``battery_state`` | sensor_msgs/BatteryState | battery |
 | ``bumper`` | std_msgs/Bool; ``bumper_contact``: geometry_msgs/Vector3Stamped (direction, impulse) | bumper |
 | ``cmd_vel`` (in) | geometry_msgs/Twist (or TwistStamped) | -> the base |
@@ -38,12 +39,13 @@ from typing import Any
 
 import structlog
 
-from bt_runtime.runtime.messages import ActionStatus, ComponentState, Path, Pose2D
+from bt_runtime.runtime.messages import ActionStatus, Path, Pose2D
 from bt_runtime.runtime.ros2 import dds, idl
 from bt_runtime.runtime.ros2.convert import pose2d_of, pose_msg, quaternion_of
 
 from .driver import SimDriver
 from .faults import Crash, parse_fault
+from .ros2_lifecycle import EmulatedLifecycleNode, take_down
 
 log = structlog.get_logger("sim.ros2_robot")
 
@@ -56,6 +58,7 @@ STATUS = {ActionStatus.SUCCEEDED: S.STATUS_SUCCEEDED, ActionStatus.CANCELED: S.S
 BACKUP_CODES = {700: 710, 701: 711, 702: 712, 703: 714, 704: 713}
 DRIVE_CODES = {700: 720, 701: 721, 702: 722, 703: 723, 704: 724}
 WAIT_CODES = {700: 740, 701: 741}
+FIRST_ACTIVATION = 0.3  # s: activating a configured stand-in server (a restart after a crash takes longer)
 
 
 def parse_crash(text: str) -> tuple[str, float]:
@@ -92,7 +95,8 @@ class SimRobot:
     def __init__(self, world: str = "apartment", robot: str = "burger", seed: int = 0, domain_id: int = 0, *,
                  namespace: str = "", crashes: list[tuple[str, float]] | tuple = (), cruise_speed: float | None = None,
                  stamped_cmd_vel: bool = False, cyclonedds_uri: str | None = None,
-                 goal_tolerance: float | None = None):
+                 goal_tolerance: float | None = None, nav_autostart: bool = False,
+                 refuse_activate: tuple[str, ...] | list[str] = ()):
         self.world, self.robot, self.seed = world, robot, seed
         self.domain_id = domain_id
         self.namespace = namespace
@@ -101,9 +105,11 @@ class SimRobot:
         self.stamped_cmd_vel = stamped_cmd_vel
         self.cyclonedds_uri = cyclonedds_uri
         self.goal_tolerance = goal_tolerance
+        self.nav_autostart = nav_autostart  # the stand-in's servers start active (else unconfigured)
+        self.refuse_activate = tuple(refuse_activate)  # lifecycle nodes whose on_activate fails
+        self.lifecycle_nodes: dict[str, EmulatedLifecycleNode] = {}
         self.driver: SimDriver | None = None
         self.node: dds.DdsNode | None = None
-        self.lifecycle: dict[str, int] = {}
         self.commands = 0
         self.published: dict[str, int] = {}
         self._unsub: list[Any] = []
@@ -137,6 +143,7 @@ class SimRobot:
             "ground_truth": pub("sim/ground_truth", idl.PoseStamped),
         }
         self.writers = writers
+        self._publish_map(node)
         convert = {"scan": self._scan, "imu": self._imu, "odom": self._odom, "pose": self._pose,
                    "battery": self._battery, "nav_cmd_vel": self._twist,
                    "ground_truth": lambda m: _stamped(m.pose)}
@@ -165,15 +172,19 @@ class SimRobot:
                 node, f"/{which}_costmap/clear_entirely_{which}_costmap", idl.ClearEntireCostmap_Request,
                 idl.ClearEntireCostmap_Response, self._clear(nav, which)))
         present = {c.name for c in sim.components()}  # a robot without a bumper has no bumper node
+        self.lifecycle_nodes = {}
         for name in (*self.LIFECYCLE, *self.NAV_LIFECYCLE):
             if name not in present and name not in self.NAV_LIFECYCLE:
                 continue
-            self.lifecycle[name] = ST.PRIMARY_STATE_ACTIVE
+            lc = self.lifecycle_nodes[name] = self._lifecycle_node(name)
             self._servers.append(dds.ServiceServer(node, f"{name}/get_state", idl.GetState_Request,
-                                                   idl.GetState_Response, self._get_state(name)))
+                                                   idl.GetState_Response, lc.get_state))
             self._servers.append(dds.ServiceServer(node, f"{name}/change_state", idl.ChangeState_Request,
-                                                   idl.ChangeState_Response, self._change_state(name)))
+                                                   idl.ChangeState_Response, lc.change_state))
         await driver.start()
+        for name in self.NAV_LIFECYCLE:  # Nav2's servers wait for a lifecycle manager (unless autostart)
+            if self.lifecycle_nodes[name].recorded != ST.PRIMARY_STATE_ACTIVE:
+                take_down(nav, name)
         t0 = asyncio.get_running_loop().time()
         for component, t in self.crashes:
             sim.faults.schedule(t0 + t, Crash(component=component))
@@ -192,6 +203,14 @@ class SimRobot:
         if self.node is not None:
             self.node.close()
             self.node = None
+
+    def _publish_map(self, node: dds.DdsNode) -> None:
+        """The world on ``map``, once, latched (reliable, transient local), as map_server does."""
+        from .ros2_map import occupancy_msg, world_grid
+
+        self.map_msg = occupancy_msg(world_grid(self.world, self.driver.map))
+        self.writers["map"] = node.publisher("map", idl.OccupancyGrid, dds.LATCHED)
+        self.writers["map"].write(self.map_msg)
 
     # -- sensors -> DDS ----------------------------------------------------------------------------
     def ros_time(self, sim_stamp: float) -> float:
@@ -365,60 +384,27 @@ class SimRobot:
 
         return clear
 
-    # -- lifecycle -------------------------------------------------------------------------------
-    def _state(self, name: str) -> ComponentState:
+    # -- lifecycle (sim/ros2_lifecycle.py) ---------------------------------------------------------
+    def _lifecycle_node(self, name: str) -> EmulatedLifecycleNode:
+        refuse = name in self.refuse_activate
         if name in self.NAV_LIFECYCLE:
-            return self.driver.navigation.components[name].state
-        return self.sim.component_state(name)
+            nav = self.driver.navigation
+            comp = nav.components[name]
+            return EmulatedLifecycleNode(
+                name, initial=ST.PRIMARY_STATE_ACTIVE if self.nav_autostart else ST.PRIMARY_STATE_UNCONFIGURED,
+                running=lambda: comp.state, hung=lambda: comp.hung, refuse_activate=refuse,
+                # a first activation is quick; after a crash it is a process restart (NavStack's delay)
+                start=lambda first: nav.restart(name, delay=FIRST_ACTIVATION if first else None),
+                stop=lambda: nav.crash(name))
+        return EmulatedLifecycleNode(
+            name, initial=ST.PRIMARY_STATE_ACTIVE, running=lambda: self.sim.component_state(name),
+            refuse_activate=refuse, start=lambda _first: self.sim.restart(name),
+            stop=lambda: self.sim.crash(name, reason="deactivated"))
 
-    def _primary_state(self, name: str) -> int:
-        state = self._state(name)
-        if state is ComponentState.ACTIVE:
-            return ST.PRIMARY_STATE_ACTIVE
-        if state is ComponentState.STARTING:
-            return 13  # TRANSITION_STATE_ACTIVATING
-        recorded = self.lifecycle.get(name, ST.PRIMARY_STATE_UNCONFIGURED)
-        # crashed: the driver went through ErrorProcessing to Unconfigured
-        return recorded if recorded in (ST.PRIMARY_STATE_INACTIVE, ST.PRIMARY_STATE_UNCONFIGURED) \
-            else ST.PRIMARY_STATE_UNCONFIGURED
-
-    def _get_state(self, name: str):
-        labels = {1: "unconfigured", 2: "inactive", 3: "active", 4: "finalized", 13: "activating"}
-
-        def get_state(_request: Any) -> Any:
-            if name in self.NAV_LIFECYCLE and self.driver.navigation.components[name].hung:
-                return None  # a hung server does not answer
-            sid = self._primary_state(name)
-            return idl.GetState_Response(current_state=ST(sid, labels.get(sid, "unknown")))
-
-        return get_state
-
-    def _change_state(self, name: str):
-        async def change_state(request: Any) -> Any:
-            t = request.transition.id
-            state = self._primary_state(name)
-            ok = False
-            nav = self.driver.navigation if name in self.NAV_LIFECYCLE else None
-            if t == T.TRANSITION_DEACTIVATE and state == ST.PRIMARY_STATE_ACTIVE:
-                if nav is not None:
-                    nav.crash(name)
-                else:
-                    self.sim.crash(name, reason="deactivated")
-                self.lifecycle[name] = ST.PRIMARY_STATE_INACTIVE
-                ok = True
-            elif t == T.TRANSITION_CLEANUP and state == ST.PRIMARY_STATE_INACTIVE:
-                self.lifecycle[name] = ST.PRIMARY_STATE_UNCONFIGURED
-                ok = True
-            elif t == T.TRANSITION_CONFIGURE and state == ST.PRIMARY_STATE_UNCONFIGURED:
-                self.lifecycle[name] = ST.PRIMARY_STATE_INACTIVE
-                ok = True
-            elif t == T.TRANSITION_ACTIVATE and state == ST.PRIMARY_STATE_INACTIVE:
-                ok = await (nav.restart(name) if nav is not None else self.sim.restart(name))
-                self.lifecycle[name] = ST.PRIMARY_STATE_ACTIVE if ok else ST.PRIMARY_STATE_UNCONFIGURED
-            log.info("sim_robot_lifecycle", component=name, transition=int(t), from_state=state, success=ok)
-            return idl.ChangeState_Response(success=ok)
-
-        return change_state
+    @property
+    def lifecycle(self) -> dict[str, int]:
+        """Each lifecycle node's state id."""
+        return {name: lc.state() for name, lc in self.lifecycle_nodes.items()}
 
 
 async def run_sim_robot(robot: SimRobot, duration: float | None = None, ready_line: bool = True) -> None:

@@ -33,6 +33,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--goal-tolerance", type=float, default=None, metavar="M",
                    help="the navigator's xy goal tolerance (default 0.25 m, TurtleBot3's Nav2 file; "
                         "the project's scenarios use 0.1)")
+    p.add_argument("--nav-autostart", action="store_true",
+                   help="the Nav2 stand-in's lifecycle servers start active (as with nav2_lifecycle_manager "
+                        "autostart); by default they start unconfigured and wait to be configured and activated")
+    p.add_argument("--refuse-activate", action="append", default=[], metavar="NODE",
+                   help="this lifecycle node's activation fails (it stays inactive; repeatable; for tests)")
     p.add_argument("--stamped-cmd-vel", action="store_true", help="cmd_vel is TwistStamped (Jazzy option)")
     p.add_argument("--loopback", action="store_true", help="DDS on 127.0.0.1 only (unless CYCLONEDDS_URI is set)")
     p.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds")
@@ -58,6 +63,12 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    known = (*SimRobot.LIFECYCLE, *SimRobot.NAV_LIFECYCLE)
+    unknown = [n for n in args.refuse_activate if n not in known]
+    if unknown:
+        print(f"error: --refuse-activate: no lifecycle node {', '.join(unknown)} (nodes: {', '.join(known)})",
+              file=sys.stderr)
+        return EXIT_USAGE
     domain = args.domain
     if domain is None:
         env = os.environ.get("ROS_DOMAIN_ID", "")
@@ -69,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
     uri = dds.loopback_config() if args.loopback and not os.environ.get("CYCLONEDDS_URI") else None
     robot = SimRobot(args.world, args.robot, seed=args.seed, domain_id=domain, namespace=args.namespace,
                      crashes=crashes, cruise_speed=args.cruise_speed, stamped_cmd_vel=args.stamped_cmd_vel,
-                     cyclonedds_uri=uri, goal_tolerance=args.goal_tolerance)
+                     cyclonedds_uri=uri, goal_tolerance=args.goal_tolerance, nav_autostart=args.nav_autostart,
+                     refuse_activate=args.refuse_activate)
     try:
         asyncio.run(run_sim_robot(robot, args.duration))
     except (FileNotFoundError, KeyError) as exc:

@@ -67,6 +67,7 @@ class RunSummary:
     gate_switches: int = 0
     estop_reasons: list[str] = field(default_factory=list)
     goal_outcomes: list[str] = field(default_factory=list)
+    bringup: dict | None = None  # the lifecycle bring-up (supervisor.bringup), when there was one
 
     @property
     def real_time_factor(self) -> float:
@@ -104,6 +105,7 @@ class AutonomyRuntime:
         self.completed: asyncio.Future = self.loop.create_future()
         self._tick_task: asyncio.Task | None = None
         self._service_tasks: list[asyncio.Task] = []
+        self.bringup_task: asyncio.Task | None = None
         self.diagnostics: DiagnosticsPublisher | None = None
         self._diagnostics_task: asyncio.Task | None = None
         self._started_wall = 0.0
@@ -191,6 +193,9 @@ class AutonomyRuntime:
                                spawn(self.gate.run(), name="gate")]
         for task in self._service_tasks:
             task.add_done_callback(self._watch_service)
+        # Nav2's lifecycle nodes configured and activated in order (runtime/bringup.py); await
+        # runtime.bringup_task for the report (supervisor.bringup)
+        self.bringup_task = spawn(self.supervisor.bring_up(), name="bringup")
         publish = getattr(self.driver, "publish_diagnostics", None)
         if publish is not None:  # health on /diagnostics where the driver speaks ROS (not safety-critical)
             self.diagnostics = DiagnosticsPublisher(self.supervisor, publish, self.clock)
@@ -269,7 +274,8 @@ class AutonomyRuntime:
         self.gate.shutdown()  # zero first: nothing below may delay it
         if self.diagnostics is not None:
             self.diagnostics.close()
-        await settle([t for t in (self._tick_task, *self._service_tasks, self._diagnostics_task) if t is not None],
+        await settle([t for t in (self._tick_task, *self._service_tasks, self._diagnostics_task, self.bringup_task)
+                      if t is not None],
                      timeout, what="runtime stop")
         if self.tree is not None:
             node_tasks = [t for t in asyncio.all_tasks(self.loop) if t.get_name().startswith("bt:")]
@@ -341,4 +347,5 @@ class AutonomyRuntime:
             supervisor_events=len(self.supervisor.events),
             gate_switches=len(self.gate.switches),
             estop_reasons=self.gate.estop_reasons,
+            bringup=self.supervisor.bringup.to_dict() if self.supervisor.bringup.status != "off" else None,
         )

@@ -159,6 +159,10 @@ class GoalIntake:
         if not (math.isfinite(pose.x) and math.isfinite(pose.y) and math.isfinite(pose.yaw)):
             self._finish(handle, GoalResult(GoalState.REJECTED, "REJECTED", UNKNOWN, "goal pose is not finite"))
             return handle
+        refused = self.runtime.supervisor.goals_refused()
+        if refused:  # a Nav2 node would not activate: nothing could carry the goal out
+            self._finish(handle, GoalResult(GoalState.REJECTED, "REJECTED", UNKNOWN, refused))
+            return handle
         if tree is None or not tree_uses_goal_handoff(tree):
             self._finish(handle, GoalResult(GoalState.REJECTED, "REJECTED", UNKNOWN,
                                             "the tree takes no goals: none of its ports uses {goal_status}"))

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import structlog
 
+from .bringup import BringupReport, NodeOutcome, bring_up
 from .config import SupervisorConfig
 from .data_checks import DataCheck
 from .messages import ComponentInfo
@@ -99,6 +100,7 @@ class SystemSupervisor:
         self._started_at = 0.0
         self._listeners: list[Callable[[SupervisorEvent], Any]] = []
         self._dead: set[str] = set()
+        self.bringup = BringupReport()  # the lifecycle bring-up at start (bring_up())
 
     # -- setup ---------------------------------------------------------------------------------
     def attach(self) -> None:
@@ -211,7 +213,7 @@ class SystemSupervisor:
             if record.state is Health.OK and record.last_seen is not None:
                 deadline = record.last_seen + record.timeout
             elif record.state is Health.UNKNOWN:
-                deadline = self._started_at + max(grace, record.timeout)
+                deadline = max(self._started_at, record.state_since) + max(grace, record.timeout)
             else:
                 continue
             deadline += 1e-6  # just past the deadline: the check is strict
@@ -228,8 +230,8 @@ class SystemSupervisor:
             if state is Health.OK:
                 if record.last_seen is not None and now - record.last_seen > record.timeout:
                     self._fail(record, self._silence_reason(record, now))
-            elif state is Health.UNKNOWN:
-                if now - self._started_at > max(self.config.startup_grace, record.timeout):
+            elif state is Health.UNKNOWN:  # the grace runs from the start, or from its bring-up
+                if now - max(self._started_at, record.state_since) > max(self.config.startup_grace, record.timeout):
                     self._fail(record, f"never heard from ({record.problem})" if record.problem
                                else "never heard from")
 
@@ -349,6 +351,71 @@ class SystemSupervisor:
 
     def summary(self) -> dict[str, str]:
         return {n: self.health(n).value for n in self.components}
+
+    # -- bring-up of lifecycle nodes (runtime/bringup.py) ----------------------------------------
+    async def bring_up(self) -> BringupReport:
+        """Configure and activate the driver's lifecycle nodes in order (nav2_lifecycle_manager's
+        startup). Components being brought up are not judged until their node is active; a
+        node that fails is an event (FAILED, with the reason) and its component is FAILED, as
+        are those the aborted bring-up left inactive; ``goals_refused()`` then says why."""
+        plan_of = getattr(self.driver, "bringup_plan", None)
+        plan = plan_of() if callable(plan_of) else None
+        if plan is None:
+            return self.bringup
+        held = {c for c in plan.components.values() if c in self.components}
+        for name in held:
+            self.components[name].watched = False
+
+        def resume(name: str | None) -> ComponentRecord | None:
+            record = self.components.get(name) if name in held else None
+            if record is not None:
+                held.discard(name)
+                record.watched = True
+                record.state_since = max(record.state_since, self.clock())  # its grace starts now
+            return record
+
+        def on_node(outcome: NodeOutcome, phase: str) -> None:
+            record = resume(outcome.component)
+            if phase != "failed":
+                return
+            reason = f"bring-up failed at {outcome.node}: {outcome.error}"
+            if record is not None:
+                self._fail(record, reason)
+            else:  # a lifecycle node the supervisor does not watch: still an event
+                self._event(outcome.node, Health.FAILED, Health.UNKNOWN, reason)
+
+        try:
+            await bring_up(self.driver, plan, self.clock, on_node, self.bringup)
+        except Exception as exc:  # a driver error is a failed bring-up, never a crash of the runtime
+            log.exception("bringup_error")
+            self.bringup.status, self.bringup.reason = "failed", f"internal error: {exc!r}"
+        finally:
+            report = self.bringup
+            for name in list(held):  # left inactive by an aborted bring-up (or cancelled)
+                record = resume(name)
+                if record is not None and report.failed:
+                    self._fail(record, f"not activated: bring-up stopped at {report.failed_node}")
+        return report
+
+    def goals_refused(self) -> str | None:
+        """Why goals cannot be taken (a bring-up that failed and a node still not active), else None."""
+        report = self.bringup
+        if not report.failed:
+            return None
+        waiting = [n.node for n in report.nodes if n.state != "active"
+                   and not (n.component in self.components and self.health(n.component) is Health.OK)]
+        if not waiting:
+            return None
+        return f"{report.describe()} (not active: {', '.join(waiting)})"
+
+    def _event(self, component: str, state: Health, previous: Health, reason: str) -> None:
+        """An event about something that has no record (e.g. a lifecycle node nobody watches)."""
+        event = SupervisorEvent(self.clock(), component, state, previous, reason)
+        self.events.append(event)
+        log.warning("component_state", component=component, state=state.value, previous=previous.value,
+                    reason=reason, sim_time=round(event.t, 3))
+        for listener in tuple(self._listeners):
+            listener(event)
 
     # -- restarts ------------------------------------------------------------------------------
     def request_restart(self, name: str) -> asyncio.Task | None:

@@ -155,10 +155,25 @@ class RobotConfig(_Model):
     k_angular: float = Field(1.0, ge=0, description="W per rad/s")
 
 
+class BringupConfig(_Model):
+    """Bring-up at start, as nav2_lifecycle_manager's startup(): configure every node of
+    ``node_names`` in order, then activate every one in order (see runtime/bringup.py)."""
+
+    enabled: bool = Field(True, description="bring the nodes up at start (nodes already active are left "
+                          "as they are, so this is harmless next to Nav2's own lifecycle_manager)")
+    node_names: list[str] = Field(
+        default_factory=lambda: ["controller_server", "planner_server", "behavior_server"],
+        description="lifecycle nodes in bring-up order (Nav2's navigation_launch.py order); "
+                    "a supervised component whose lifecycle_node is listed is reported by component")
+    service_timeout: float = Field(5.0, gt=0, description="wait this long for a node's lifecycle services "
+                                   "(nav2_lifecycle_manager's service_timeout)")
+
+
 class LifecycleConfig(_Model):
     transition_timeout: float = Field(3.0, gt=0, description="per change_state call (activate may take "
                                       "as long as the driver needs to start)")
     poll_hz: float = Field(2.0, gt=0, le=50, description="get_state polling of heartbeat: lifecycle components")
+    bringup: BringupConfig = Field(default_factory=BringupConfig)
 
 
 class Ros2Config(_Model):

@@ -27,6 +27,7 @@ from typing import Any
 
 import structlog
 
+from ..bringup import BringupError, BringupPlan, transition
 from ..messages import ComponentInfo, ComponentState, RobotInfo, Twist
 from . import dds, idl
 from .config import Qos, Ros2Config
@@ -75,7 +76,8 @@ class Ros2Driver:
         self._readers: dict[str, dds.Reader] = {}
         self._cmd_writer: Any = None
         self._cmd_type: type | None = None
-        self._lifecycle: dict[str, tuple[dds.ServiceClient, dds.ServiceClient]] = {}
+        self._lifecycle: dict[str, tuple[dds.ServiceClient, dds.ServiceClient]] = {}  # by component
+        self._nodes: dict[str, tuple[dds.ServiceClient, dds.ServiceClient]] = {}  # by lifecycle node
         self.lifecycle_states: dict[str, int] = {}
         self._restarting: set[str] = set()
         self._poller: asyncio.Task | None = None
@@ -118,11 +120,7 @@ class Ros2Driver:
         self._cmd_writer = node.publisher(cmd.name, self._cmd_type, _qos(cmd.qos))
         for name, comp in cfg.components.items():
             if comp.lifecycle_node:
-                self._lifecycle[name] = (
-                    dds.ServiceClient(node, comp.lifecycle_node.rstrip("/") + "/get_state",
-                                      idl.GetState_Request, idl.GetState_Response),
-                    dds.ServiceClient(node, comp.lifecycle_node.rstrip("/") + "/change_state",
-                                      idl.ChangeState_Request, idl.ChangeState_Response))
+                self._lifecycle[name] = self._node_clients(comp.lifecycle_node)
         self.navigation.attach(node)
         polled = [n for n, c in cfg.components.items() if c.heartbeat == "lifecycle"]
         if polled:
@@ -146,6 +144,8 @@ class Ros2Driver:
         self._cmd_writer = None
         for stream in [s for s in self._readers if s.startswith(("cmd_vel_input/", "lock/"))]:
             del self._readers[stream]  # closed with the node; reopened by the next start
+        self._nodes.clear()
+        self._lifecycle.clear()
         node.close()
         log.info("ros2_driver_stopped", received=dict(self.received), dropped=self.dropped_counts())
 
@@ -363,6 +363,48 @@ class Ros2Driver:
         now = self.loop.time() if self.loop is not None else 0.0
         return ComponentState.ACTIVE if now - max(seen) <= self._timeout(name) else ComponentState.INACTIVE
 
+    # -- lifecycle nodes (bring-up and restarts; see runtime/bringup.py) -------------------------
+    def _node_clients(self, node_name: str) -> tuple[dds.ServiceClient, dds.ServiceClient]:
+        """get_state / change_state clients of one lifecycle node (one pair per node)."""
+        key = node_name.rstrip("/")
+        clients = self._nodes.get(key)
+        if clients is None:
+            clients = self._nodes[key] = (
+                dds.ServiceClient(self.node, key + "/get_state", idl.GetState_Request, idl.GetState_Response),
+                dds.ServiceClient(self.node, key + "/change_state", idl.ChangeState_Request,
+                                  idl.ChangeState_Response))
+        return clients
+
+    def bringup_plan(self) -> BringupPlan | None:
+        """Nav2's servers to configure and activate at start (``lifecycle.bringup``)."""
+        cfg = self.config.lifecycle
+        if self.node is None or not cfg.bringup.enabled or not cfg.bringup.node_names:
+            return None
+        by_node = {c.lifecycle_node.rstrip("/"): name for name, c in self.config.components.items()
+                   if c.lifecycle_node}
+        nodes = tuple(n.rstrip("/") for n in cfg.bringup.node_names)
+        return BringupPlan(nodes, {n: by_node[n] for n in nodes if n in by_node},
+                           cfg.bringup.service_timeout, cfg.transition_timeout)
+
+    async def node_state(self, node: str, timeout: float) -> int | None:
+        if self.node is None:
+            return None
+        try:
+            response = await self._node_clients(node)[0].call(idl.GetState_Request(), timeout)
+        except dds.ServiceError:
+            return None
+        return int(response.current_state.id)
+
+    async def change_node_state(self, node: str, transition: int, timeout: float) -> bool | None:
+        if self.node is None:
+            return None
+        request = idl.ChangeState_Request(transition=T(transition, TRANSITION_LABELS.get(transition, "")))
+        try:
+            response = await self._node_clients(node)[1].call(request, timeout)
+        except dds.ServiceError:
+            return None
+        return bool(response.success)
+
     async def get_lifecycle_state(self, name: str, timeout: float | None = None) -> int | None:
         """The component's lifecycle state id (None: no answer or no lifecycle node)."""
         clients = self._lifecycle.get(name)
@@ -377,29 +419,31 @@ class Ros2Driver:
 
     async def restart(self, name: str) -> bool:
         """deactivate -> cleanup -> configure -> activate (from whatever primary state it is
-        in) through the component's lifecycle services; False without lifecycle node, if a
-        service does not answer or a transition fails."""
-        if name not in self._lifecycle:
+        in) through the component's lifecycle services, each transition checked with get_state
+        as nav2_lifecycle_manager does; False without lifecycle node, if a service does not
+        answer or a transition fails."""
+        comp = self.config.components.get(name)
+        if name not in self._lifecycle or comp is None:
             log.warning("ros2_restart_unsupported", component=name, reason="no lifecycle node configured")
             return False
+        node = comp.lifecycle_node.rstrip("/")
+        timeout = self.config.lifecycle.transition_timeout
         self._restarting.add(name)
         try:
             state = await self.get_lifecycle_state(name)
+            if state is not None and state > idl.State.PRIMARY_STATE_FINALIZED:  # mid-transition: let it settle
+                await asyncio.sleep(min(timeout, 0.5))
+                state = await self.get_lifecycle_state(name)
             sequence = RESTART_SEQUENCE.get(state) if state is not None else None
             if sequence is None:
                 log.warning("ros2_restart_failed", component=name, reason=f"lifecycle state {state}")
                 return False
-            change = self._lifecycle[name][1]
-            for transition in sequence:
-                label = TRANSITION_LABELS[transition]
+            for step in sequence:
                 try:
-                    response = await change.call(idl.ChangeState_Request(transition=T(transition, label)),
-                                                 self.config.lifecycle.transition_timeout)
-                except dds.ServiceError as exc:
-                    log.warning("ros2_restart_failed", component=name, transition=label, reason=str(exc))
-                    return False
-                if not response.success:
-                    log.warning("ros2_restart_failed", component=name, transition=label, reason="refused")
+                    await transition(self, node, step, timeout, self.loop.time)
+                except BringupError as exc:
+                    log.warning("ros2_restart_failed", component=name, transition=TRANSITION_LABELS[step],
+                                reason=str(exc))
                     return False
             self.lifecycle_states[name] = idl.State.PRIMARY_STATE_ACTIVE
             log.info("ros2_component_restarted", component=name)

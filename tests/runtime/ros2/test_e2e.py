@@ -105,7 +105,8 @@ LIDAR_TREE = """<root BTCPP_format="4"><BehaviorTree ID="Main">
 
 
 async def test_lidar_2_crash_while_navigating_restart_and_reach_goal(domain):
-    async with sim_robot(domain, "--robot", "rosbot2", "--goal-tolerance", "0.1") as _robot:
+    # the tree navigates from its first tick: Nav2 is up already (as with the lifecycle_manager's autostart)
+    async with sim_robot(domain, "--robot", "rosbot2", "--goal-tolerance", "0.1", "--nav-autostart") as _robot:
         driver = Ros2Driver(Ros2Config(domain_id=domain))
         runtime = AutonomyRuntime(driver, realtime=True, register=[register])
         runtime.load_tree(LIDAR_TREE)
@@ -251,7 +252,7 @@ async def test_navigation_api_over_nav2_interfaces(domain):
                         components={"lidar": {"streams": ["scan"], "rate_hz": 5, "lifecycle_node": "lidar"},
                                     "wheels": {"kind": "base", "streams": ["odom"], "rate_hz": 50},
                                     "ghost": {"streams": ["imu"], "rate_hz": 50, "lifecycle_node": "no_such_node"}})
-    async with sim_robot(domain, "--robot", "burger"):
+    async with sim_robot(domain, "--robot", "burger", "--nav-autostart"):  # no bring-up without the runtime
         driver = Ros2Driver(config)
         nav_cmds: list[float] = []
         driver.subscribe("nav_cmd_vel", lambda t: nav_cmds.append(t.linear))
