@@ -52,8 +52,8 @@ def component_diagnostics(supervisor: SystemSupervisor, now: float) -> list[Comp
         if record.problem:
             values += (("last_problem", record.problem),)
         out.append(ComponentDiagnostic(f"supervisor: {name}", LEVELS.get(state, STALE), message, name, values))
-    bringup = supervisor.bringup
-    if bringup.status != "off":  # the lifecycle bring-up, as nav2_lifecycle_manager reports "Nav2 Health"
+    bringup = getattr(supervisor, "bringup", None)
+    if bringup is not None and bringup.status != "off":  # the lifecycle bring-up, as nav2_lifecycle_manager reports "Nav2 Health"
         level = {"active": OK, "running": WARN}.get(bringup.status, ERROR)
         out.append(ComponentDiagnostic("supervisor: bringup", level, bringup.describe(), "bringup",
                                        tuple((n.node, n.error or n.state) for n in bringup.nodes)))
