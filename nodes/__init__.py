@@ -18,7 +18,8 @@ AUTONOMY_NODES = [
     collision.CollisionDetected, collision.InContact, collision.EstimateContactPoint, collision.ReverseOut,
     collision.StopRobot, collision.ReleaseRobot, collision.MarkObstacle, collision.ClearCostmaps,
     battery.BatteryCanReach, battery.BatteryAbove, battery.RefuseGoal,
-    path.RatePathQuality, path.FindAlternativeGoal, path.EscapeInflation,
+    path.RatePathQuality, path.PathReachesGoal, path.PlannerAnswers,
+    path.FindAlternativeGoal, path.EscapeInflation,
     goals.GoalPending, goals.SetGoalStatus, goals.RetryGoal,
     motion_safety.StopBeforeObstacle,
 ]

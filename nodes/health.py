@@ -38,9 +38,10 @@ class ComponentHealthy(ConditionNode):
 
 
 class ComponentsHealthy(ConditionNode):
-    """SUCCESS unless a listed component (all watched ones when empty) has failed, is
-    restarting or is dead (not yet heard from during start-up counts as fine); those are
-    written to ``unhealthy``."""
+    """SUCCESS only if every listed component (all watched ones when empty) is OK; the others
+    (failed, restarting, dead, or not heard from yet: UNKNOWN is not OK) are written to
+    ``unhealthy``. Restarting is ``RequestRestarts``' job: it leaves a merely silent-at-start
+    component alone."""
 
     @classmethod
     def provided_ports(cls):
@@ -53,7 +54,7 @@ class ComponentsHealthy(ConditionNode):
 
     def tick(self):
         names = self.get_input("components", [])
-        bad = self.context.supervisor.failed_among(list(names) if names else None)
+        bad = self.context.supervisor.not_ok_among(list(names) if names else None)
         if bad != self._written:  # writing an unchanged list every tick costs more than the check
             self._written = bad
             self.set_output("unhealthy", bad)

@@ -21,7 +21,7 @@ from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.messages import NavErrorCode, Path, Pose2D, wrap_angle
 
 from .robot import robot_pose
-from .types import PATH, POSE
+from .types import ERROR_CODE, PATH, POSE
 
 log = structlog.get_logger("nodes.path")
 SUCCESS, FAILURE = NodeStatus.SUCCESS, NodeStatus.FAILURE
@@ -62,6 +62,54 @@ class RatePathQuality(ConditionNode):
         self.set_output("quality", float(quality))
         ok = valid and ratio <= self.get_input("max_length_ratio") and clearance >= self.get_input("min_clearance")
         return SUCCESS if ok else FAILURE
+
+
+class PathReachesGoal(ConditionNode):
+    """SUCCESS if ``path`` ends within ``tolerance`` m of ``goal``.
+
+    Nav2's NavFn (default ``tolerance`` 0.5 m) answers a goal inside an obstacle with a plan to
+    the nearest plannable cell, which lies in the inflation zone, right beside the obstacle.
+    Following it drives the robot against what the scan then marks. A plan that stops short
+    means the goal is occupied: FAILURE, and ``error_code_id`` is set to GOAL_OCCUPIED (206) so
+    the tree searches a safe alternative instead."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("path", PATH, "{path}"), input_port("goal", POSE, "{goal}"),
+                input_port("tolerance", float, 0.1, "m between the path's end and the goal"),
+                output_port("error_code_id", ERROR_CODE, "{plan_error}", "206 (GOAL_OCCUPIED) when it stops short")]
+
+    def tick(self):
+        path: Path | None = self.get_input("path", None)
+        goal: Pose2D = self.get_input("goal")
+        if path is not None and ends_at(path, goal, self.get_input("tolerance")):
+            return SUCCESS
+        self.set_output("error_code_id", int(NavErrorCode.GOAL_OCCUPIED))
+        return FAILURE
+
+
+class PlannerAnswers(AsyncActionNode):
+    """SUCCESS if the planner plans a trivial request (from the robot to where it stands).
+
+    Tells "the planner is broken" from "the goal is cut off": both fail ComputePathToPose with
+    NO_VALID_PATH, but a planner that fails every request fails this one too. After a restart
+    that did not help and no alternative, a planner that answers means the goal is unreachable:
+    retrying (and restarting the planner again) cannot help."""
+
+    async def run(self):
+        pose = robot_pose(self)
+        if pose is None:
+            return FAILURE
+        result = await self.context.navigation.compute_path_to_pose(pose)
+        return SUCCESS if result.succeeded else FAILURE
+
+
+def ends_at(path: Path, goal: Pose2D, tolerance: float) -> bool:
+    """Does ``path`` end within ``tolerance`` m of ``goal``?"""
+    if len(path) < 1:
+        return False
+    end = path.points[-1]
+    return math.hypot(float(end[0]) - goal.x, float(end[1]) - goal.y) <= tolerance
 
 
 def beyond(path: Path, pose: Pose2D, radius: float) -> Path | None:
@@ -124,7 +172,7 @@ class FindAlternativeGoal(AsyncActionNode):
         floor = self.get_input("min_clearance") or (self.context.robot.radius + 0.1)
         if kept is not None and _clearance(nav, kept) >= floor - 0.05:  # one cell of re-marking tolerated
             result = await nav.compute_path_to_pose(kept)
-            if result.succeeded and result.path is not None and len(result.path) >= 1:
+            if _reaches(result, kept):
                 return self._use(goal, kept, result.path, 1)
             memory.pop(goal, None)  # it became invalid: search again
         robot = robot_pose(self)
@@ -154,7 +202,7 @@ class FindAlternativeGoal(AsyncActionNode):
             result = await nav.compute_path_to_pose(candidate)
             if result.error_code in (NavErrorCode.PLANNER_UNKNOWN, NavErrorCode.PLANNER_TF_ERROR):
                 return None, tried  # the planner itself is down: searching further cannot help
-            if not (result.succeeded and result.path is not None and len(result.path) >= 1):
+            if not _reaches(result, candidate):
                 continue
             cost = result.path.length + weight * candidate.distance_to(goal)
             if best is None or cost < best[0]:
@@ -170,6 +218,12 @@ class FindAlternativeGoal(AsyncActionNode):
         self.set_output("detail", f"alternative goal {alternative.x:.2f};{alternative.y:.2f};{alternative.yaw:.2f} "
                                   f"({alternative.distance_to(goal):.2f} m from the requested goal)")
         return SUCCESS
+
+
+def _reaches(result, pose: Pose2D) -> bool:
+    """A plan that ends at ``pose`` (not one the planner's goal tolerance moved elsewhere: the
+    candidate itself is occupied then)."""
+    return bool(result.succeeded and result.path is not None and ends_at(result.path, pose, 0.1))
 
 
 def _clearance(nav, pose: Pose2D) -> float:

@@ -299,6 +299,29 @@ class SystemSupervisor:
                 out.append(name)
         return out
 
+    def not_ok_among(self, names: list[str] | None = None) -> list[str]:
+        """The components of ``names`` (every one but the tree when None) that are not OK:
+        as ``failed_among``, plus those not heard from yet (UNKNOWN) and names the supervisor
+        does not watch. UNKNOWN is not OK: a condition that lets it pass lets a goal start
+        before localization or the planner has spoken."""
+        now = self.clock()
+        records = self.components
+        out = []
+        for name in (names if names is not None else records):
+            record = records.get(name)
+            if record is None:
+                out.append(name)
+                continue
+            if names is None and name == "tree":
+                continue
+            if record.state is Health.OK:
+                seen = record.last_seen
+                if record.watched and seen is not None and now - seen > record.timeout:
+                    out.append(name)
+            else:
+                out.append(name)
+        return out
+
     def any_dead(self, names: list[str] | None = None) -> bool:
         """Is one of ``names`` (any component when None) DEAD? (cheap: a DEAD state is stored)."""
         if not self._dead:

@@ -213,20 +213,43 @@ def _wall_point(rng: np.random.Generator, world: str, near: tuple[float, float],
     return None
 
 
-def _has_alternative(world: str, robot: str, start, target, within: float = 0.75) -> bool:
-    """Is there a point within ``within`` m of ``target``, clear of obstacles by the robot's
-    radius plus a margin, that the static map lets the robot reach?"""
+# The layer's documented rule for alternatives (trees/autonomy.xml, nodes/path.py): candidates on
+# rings 0.1 m apart up to 0.85 m from the goal, 16 per ring (the first facing the robot), at least
+# the robot's radius + 0.1 m from lethal cells, reachable by a plan. The generator applies the same
+# rule on the world's geometry; the costmap's 5 cm cells and the scan's re-marking blur clearance by
+# up to BLUR either way, so a target whose best candidate lies within BLUR of the floor is
+# ambiguous and is not used (the expected outcome would be a coin toss, not a property of the layer).
+ALT_RADIUS, ALT_STEP, ALT_DIRECTIONS, ALT_MARGIN, BLUR = 0.85, 0.1, 16, 0.1, 0.07
+
+
+def _alternative_expected(world: str, robot: str, start, target,
+                          disc: tuple[float, float, float] | None = None) -> bool | None:
+    """True if the layer's rule finds a safe reachable alternative near ``target``, False if it
+    cannot, None if that hangs on the costmap's discretisation. ``disc`` (x, y, radius): an
+    obstacle added to the map at run time."""
+    from bt_runtime.runtime.messages import Pose2D
+    from nodes.path import ring_candidates
+
     from ..robot import load_profile
 
     _, w = _planner(world, robot)
-    need = load_profile(robot).radius + 0.1
-    for r in np.arange(0.1, within + 1e-9, 0.1):
-        for a in np.linspace(0, 2 * math.pi, 16, endpoint=False):
-            x, y = target[0] + r * math.cos(a), target[1] + r * math.sin(a)
-            if w.bounds.contains(x, y) and w.clearance(x, y) >= need and \
-                    path_length(world, robot, start[:2], (x, y)) < math.inf:
+    need = load_profile(robot).radius + ALT_MARGIN
+    best = -math.inf
+    for c in ring_candidates(Pose2D(*target[:2]), Pose2D(*start[:2]), ALT_RADIUS, ALT_STEP, ALT_DIRECTIONS):
+        if not w.bounds.contains(c.x, c.y):
+            continue
+        clear = w.clearance(c.x, c.y)
+        if disc is not None:
+            clear = min(clear, math.hypot(c.x - disc[0], c.y - disc[1]) - disc[2])
+        if clear <= best or clear < need - BLUR:
+            continue
+        if path_length(world, robot, start[:2], (c.x, c.y)) < math.inf:
+            best = clear
+            if best >= need + BLUR:
                 return True
-    return False
+    if best < need - BLUR:
+        return False
+    return None
 
 
 def unreachable_goal_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
@@ -236,18 +259,27 @@ def unreachable_goal_variant(rng: np.random.Generator, index: int) -> ScenarioSp
     map_obstacles, faults = [], []
     criterion: dict[str, Any] = {"kind": "alternative_reached", "goal": 0, "within": 1.0}
     target = goal
+    expected: bool | None = None
+    if how == "in_wall":
+        for _ in range(10):  # a wall point whose outcome the layer's rule decides clearly
+            point = _wall_point(rng, world, goal[:2], start[:2])
+            if point is None:
+                break
+            expected = _alternative_expected(world, robot, start, point)
+            if expected is not None:
+                target = (point[0], point[1], goal[2])
+                break
+        else:
+            point = None
+        if point is None or expected is None:
+            how = "in_obstacle"
     if how == "in_obstacle":
-        radius = float(rng.uniform(0.15, 0.4))
+        for radius in (float(rng.uniform(0.15, 0.4)), 0.3, 0.2):
+            expected = _alternative_expected(world, robot, start, goal, (goal[0], goal[1], radius))
+            if expected is not None:
+                break
         map_obstacles.append({"kind": "obstacle_at", "x": goal[0], "y": goal[1], "radius": radius,
                               "name": "at_goal"})
-    elif how == "in_wall":
-        point = _wall_point(rng, world, goal[:2], start[:2])
-        if point is None:
-            how = "in_obstacle"
-            map_obstacles.append({"kind": "obstacle_at", "x": goal[0], "y": goal[1], "radius": 0.3,
-                                  "name": "at_goal"})
-        else:
-            target = (point[0], point[1], goal[2])
     elif how == "outside_map":
         _, w = _planner(world, "rosbot2")
         b = w.bounds
@@ -258,11 +290,11 @@ def unreachable_goal_variant(rng: np.random.Generator, index: int) -> ScenarioSp
         x, y = ((b.xmin - out, y), (b.xmax + out, y), (x, b.ymin - out), (x, b.ymax + out))[side]
         target = (x, y, goal[2])
         criterion = {"kind": "goal_refused", "goal": 0, "max_travel": 0.3}
-    else:  # a phantom obstacle on the goal in the costmaps (no sensor supports it): clear, re-plan
+    elif how == "phantom":  # a phantom obstacle on the goal in the costmaps (no sensor supports it): clear, re-plan
         faults.append({"fault": {"kind": "nav_phantom_obstacle", "x": goal[0], "y": goal[1], "radius": 0.3},
                        "at": 0.5})
         criterion = {"kind": "reach_goal", "goal": 0, "tolerance": 0.25}
-    if criterion["kind"] == "alternative_reached" and not _has_alternative(world, robot, start, target):
+    if criterion["kind"] == "alternative_reached" and expected is False:
         how += " (no safe point near it: refuse)"
         criterion = {"kind": "goal_refused", "goal": 0, "max_travel": 0.3}
     return _spec(f"V{index:04d}_unreachable_goal", "II", f"goal {how.replace('_', ' ')} ({robot} in {world})",

@@ -20,11 +20,24 @@ async def test_components_healthy_reports_the_failed_ones(runtime):
     await rt.stop()
 
 
-async def test_unknown_at_startup_is_not_a_failure(runtime):
-    rt = await runtime(tree_xml(KEEP.format('<ComponentsHealthy unhealthy="{bad}"/>')))
+async def test_unknown_at_startup_is_not_ok_and_not_restarted(runtime):
+    xml = tree_xml(KEEP.format('<Sequence><RequestRestarts restarting="{r}"/>'
+                               '<ComponentsHealthy unhealthy="{bad}"/></Sequence>'))
+    rt = await runtime(xml)
     await asyncio.sleep(0.05)  # the battery (1 Hz) has not published yet
     assert rt.supervisor.health("battery") is Health.UNKNOWN
+    assert "battery" in rt.tree.root_blackboard.get("bad")  # UNKNOWN is not OK
+    assert rt.tree.root_blackboard.get("r") == []  # ... and not a failure to restart
+    await asyncio.sleep(2.0)
     assert rt.tree.root_blackboard.get("bad") == []
+    assert not [e for e in rt.supervisor.events if e.state is Health.RESTARTING]
+    await rt.stop()
+
+
+async def test_a_component_the_supervisor_does_not_watch_is_not_ok(runtime):
+    rt = await runtime(tree_xml(KEEP.format('<ComponentsHealthy components="imu;sonar" unhealthy="{bad}"/>')))
+    await asyncio.sleep(1.5)
+    assert rt.tree.root_blackboard.get("bad") == ["sonar"]
     await rt.stop()
 
 

@@ -68,18 +68,28 @@ def test_ring_candidates_cover_every_direction_on_each_ring():
     assert first_ring == {(0.1, 0.0), (0.0, 0.1), (-0.1, 0.0), (0.0, -0.1)}  # no robot: starts at +x
 
 
-def _plans(*lengths: float | NavErrorCode) -> list[NavResult]:
-    """Planner answers in order: a number is a straight path of that length, a code an abort."""
-    return [NavResult(ActionStatus.ABORTED, x, "no") if isinstance(x, NavErrorCode)
-            else NavResult(ActionStatus.SUCCEEDED, NavErrorCode.NONE, "", _line((0, 0), (x, 0))) for x in lengths]
+def _plans(*lengths: float | NavErrorCode) -> list[NavResult | float]:
+    """Planner answers in order: a number is a straight path of that length ending at the pose
+    asked for, a code an abort (a NavResult is answered as it is)."""
+    return [NavResult(ActionStatus.ABORTED, x, "no") if isinstance(x, NavErrorCode) else x for x in lengths]
 
 
-def _search_context(plans: list[NavResult], clearance=lambda pose: 1.0):
+def _search_context(plans: list[NavResult | float], clearance=lambda pose: 1.0):
     ctx = fake_context()
     ctx.robot = RobotInfo()
     ctx.backup.pose(-2.0, 0.0)
-    ctx.navigation.plan_results = plans
-    ctx.navigation.path_clearance = lambda path: clearance(Pose2D(*path.points[0]))
+    nav = ctx.navigation
+    nav.plan_results = plans
+    nav.path_clearance = lambda path: clearance(Pose2D(*path.points[0]))
+    answer = nav.compute_path_to_pose
+
+    async def compute_path_to_pose(goal, **kw):
+        result = await answer(goal, **kw)
+        if isinstance(result, NavResult):
+            return result
+        return NavResult(ActionStatus.SUCCEEDED, NavErrorCode.NONE, "", _line((goal.x - result, goal.y), (goal.x, goal.y)))
+
+    nav.compute_path_to_pose = compute_path_to_pose
     return ctx
 
 
@@ -126,3 +136,39 @@ async def test_a_planner_that_is_down_stops_the_search():
     ctx = _search_context(_plans(*[NavErrorCode.PLANNER_UNKNOWN] * 16))
     status, bb, asked = await _search(ctx)
     assert status is F and 1 <= len(asked) <= 2  # at most one try per clearance level, not all 8 candidates
+
+
+def _ends(path_end: tuple[float, float] | None, goal: Pose2D = GOAL):
+    ctx = _search_context([])
+    bb = {"goal": goal, "plan_error": 0}
+    if path_end is not None:
+        bb["path"] = _line((0, 0), path_end)
+    tree, _ = build('<PathReachesGoal path="{path}" goal="{goal}" error_code_id="{plan_error}"/>', ctx,
+                    register=(register_autonomy_nodes,), bb_init=bb)
+    return tree.tick_once(), tree.root_blackboard.get("plan_error")
+
+
+def test_a_plan_that_ends_short_of_the_goal_reads_as_goal_occupied():
+    assert _ends((GOAL.x, GOAL.y)) == (S, 0)
+    assert _ends((GOAL.x - 0.05, GOAL.y)) == (S, 0)  # within one cell
+    # Nav2's planner tolerance moved the end out of the obstacle the goal lies in
+    assert _ends((GOAL.x - 0.35, GOAL.y)) == (F, int(NavErrorCode.GOAL_OCCUPIED))
+    assert _ends(None) == (F, int(NavErrorCode.GOAL_OCCUPIED))
+
+
+async def test_a_candidate_whose_plan_ends_elsewhere_is_not_an_alternative():
+    no = NavErrorCode.NO_VALID_PATH
+    elsewhere = NavResult(ActionStatus.SUCCEEDED, NavErrorCode.NONE, "", _line((0, 0), (1.0, 0)))
+    # the first candidate is occupied: the planner's tolerance answers with a plan to elsewhere
+    ctx = _search_context(_plans(elsewhere, *[no] * 7, elsewhere, *[no] * 7))
+    status, bb, asked = await _search(ctx, extra_rings="0")
+    assert status is F and len(asked) == 16 and not bb.get("goal_detail", default="")
+
+
+async def test_planner_answers_tells_a_broken_planner_from_a_cut_off_goal():
+    for plans, expected in (([NavResult(ActionStatus.SUCCEEDED, NavErrorCode.NONE, "", _line((-2, 0), (-2, 0)))], S),
+                            (_plans(NavErrorCode.NO_VALID_PATH), F)):
+        ctx = _search_context(plans)
+        tree, _ = build("<PlannerAnswers/>", ctx, register=(register_autonomy_nodes,))
+        assert await tree.tick_while_running_async() is expected
+        assert ctx.navigation.calls[-1][1][0].distance_to(Pose2D(-2.0, 0.0)) < 1e-9  # asked for its own pose
