@@ -85,6 +85,15 @@ class TwistMux:
         self.locks = {name: MuxLock(name, spec.topic, spec.priority, spec.timeout)
                       for name, spec in sorted(locks.items())}
         self._ranked = sorted(self.inputs.values(), key=lambda i: -i.priority)  # stable: name order on ties
+        top_lock = max(self.locks.values(), key=lambda lk: lk.priority, default=None)
+        for entry in self._ranked:
+            if top_lock is not None and entry.priority >= top_lock.priority:
+                log.warning("gate_input_above_every_lock", input=entry.name, priority=entry.priority,
+                            lock=top_lock.name, lock_priority=top_lock.priority,
+                            note="no lock masks this input (the gate's emergency stop still does)")
+            if entry.timeout == 0:
+                log.warning("gate_input_never_stale", input=entry.name,
+                            note="timeout 0: its last command stands until another one comes")
 
     def set_command(self, name: str, twist: Twist, now: float) -> None:
         entry = self.inputs[name]

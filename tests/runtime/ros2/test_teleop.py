@@ -1,7 +1,7 @@
 """Teleop over real DDS: ``sim-robot`` in its own process, the runtime with ``Ros2Driver`` and
 trees/autonomy.xml in this one, and a joystick written here as a plain DDS publisher on
 ``cmd_vel_teleop`` (geometry_msgs/Twist) with an e-stop on ``e_stop`` (std_msgs/Bool): the
-default gate inputs and locks.
+default gate inputs and locks, plus a TwistStamped input above teleop.
 
 One robot process for the story: navigation drives to a goal; teleop takes over (the robot
 turns in place as the joystick says); the ``e_stop`` lock stops it while the joystick keeps
@@ -18,6 +18,7 @@ import pytest
 pytest.importorskip("cyclonedds")
 
 from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
+from bt_runtime.runtime.config import GateConfig, RuntimeConfig  # noqa: E402
 from bt_runtime.runtime.messages import Pose2D  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
 from tests.helpers import SimRobotProcess, wait_until  # noqa: E402
@@ -45,7 +46,10 @@ async def test_teleop_outranks_navigation_and_loses_to_the_e_stop():
     try:
         await robot.ready()
         driver = Ros2Driver(Ros2Config(domain_id=domain))
-        runtime = AutonomyRuntime(driver, realtime=True, register=[nodes.register_all])
+        inputs = {"teleop": {"topic": "cmd_vel_teleop", "priority": 100, "timeout": 0.5},  # the default
+                  "pad": {"topic": "cmd_vel_pad", "priority": 150, "timeout": 0.5, "stamped": True}}
+        config = RuntimeConfig(gate=GateConfig(inputs=inputs))
+        runtime = AutonomyRuntime(driver, config, realtime=True, register=[nodes.register_all])
         runtime.load_tree(ROOT / "trees" / "autonomy.xml")
         await runtime.start()
         gate = runtime.gate
@@ -55,6 +59,7 @@ async def test_teleop_outranks_navigation_and_loses_to_the_e_stop():
             node.subscription("cmd_vel", idl.Twist, dds.QosProfile(reliable=False, depth=50),
                               lambda samples, _now: wheels.extend((m.linear.x, m.angular.z) for m in samples))
             joystick = node.publisher("cmd_vel_teleop", idl.Twist)
+            pad = node.publisher("cmd_vel_pad", idl.TwistStamped)
             e_stop = node.publisher("e_stop", idl.Bool)
             names = [c.name for c in driver.components()]
             await wait_until(lambda: runtime.supervisor.all_healthy(names), 15, "components healthy")
@@ -90,6 +95,20 @@ async def test_teleop_outranks_navigation_and_loses_to_the_e_stop():
             assert gate.source == "lock" and wheels[-1] == (0.0, 0.0)
             e_stop.write(idl.Bool(False))
             await wait_until(lambda: gate.source == "teleop" and wheels[-1] == (0.0, TURN), 3, "teleop again")
+
+            # 3b. a TwistStamped input of higher priority outranks teleop while it speaks
+            async def push_pad():
+                while True:
+                    pad.write(idl.TwistStamped(header=idl.Header(stamp=idl.Time.now(), frame_id="base_link"),
+                                               twist=twist(0.0, -TURN)))
+                    await asyncio.sleep(0.05)
+
+            pad_task = asyncio.ensure_future(push_pad())
+            try:
+                await wait_until(lambda: gate.source == "pad" and wheels[-1] == (0.0, -TURN), 5, "the pad's command")
+            finally:
+                pad_task.cancel()
+            await wait_until(lambda: gate.source == "teleop", 3, "teleop after the pad's timeout")
 
             # 4. the joystick falls silent: after its 0.5 s timeout it no longer drives
             joystick_task.cancel()
