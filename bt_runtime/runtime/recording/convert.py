@@ -285,7 +285,7 @@ def supervisor_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
 
 
 def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
-    level = LOG_WARN if e.source in ("estop", "deadman") else LOG_INFO
+    level = LOG_WARN if e.source in ("estop", "deadman", "lock") else LOG_INFO
     text = f"{e.previous} -> {e.source}: {e.reason}"
     return [(topic, "rcl_interfaces/msg/Log", log_line(e.t, level, "gate", text))]
 
