@@ -235,8 +235,13 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
     t0 = runtime.clock()
 
     async def body() -> None:
-        ready = await wait_until_reported(runtime.supervisor, runtime.clock, args.ready_timeout)
-        if not ready.ready:
+        bringup = await asyncio.shield(runtime.bringup_task)  # Nav2's lifecycle nodes (--driver ros2)
+        if bringup.failed:  # goals are refused (REJECTED, naming the node); the summary says why
+            held["notes"].append(bringup.describe())
+            _say(console, f"error: {bringup.describe()}")
+        ready = (await wait_until_reported(runtime.supervisor, runtime.clock, args.ready_timeout)
+                 if not bringup.failed else None)
+        if ready is not None and not ready.ready:
             note = f"start-up: {ready.describe()} after {ready.waited:.1f} s; starting anyway"
             held["notes"].append(note)
             _say(console, f"warning: {note}")

@@ -13,8 +13,6 @@ from typing import Any
 from ..runtime.messages import Pose2D
 from .summary import ABORTED, FROM_TREE_STATUS, NOT_FINISHED, SUCCEEDED, GoalOutcome
 
-HANDOFF_DONE = ("SUCCEEDED", "ABORTED", "REFUSED", "CANCELED")
-
 
 def uses_goal_handoff(tree: Any) -> bool:
     return "goal_status" in port_keys(tree)
@@ -39,38 +37,57 @@ def outcomes_for(goals: list[Pose2D]) -> list[GoalOutcome]:
 
 async def send_goals(runtime: Any, goals: list[Pose2D], outcomes: list[GoalOutcome], witness: Any) -> None:
     """Hand over each goal, wait for its end, note its outcome and, if it failed, why.
-    The tree is not ticking yet (``runtime.start(tick=False)``); this starts it."""
-    bb = runtime.tree.root_blackboard
-    handoff = uses_goal_handoff(runtime.tree)
-    for i, goal in enumerate(goals):
-        out = outcomes[i]
-        bb.set("goal", goal)
-        bb.set("goals", [goal])
-        out.sent_at = runtime.clock()
-        if handoff:
-            bb.set("goal_status", "PENDING")
-            if i == 0:
-                runtime.restart_tree()
-            while bb.get("goal_status", default="") not in HANDOFF_DONE:
-                if runtime.completed.done():
-                    _finish(out, FROM_TREE_STATUS.get(runtime.completed.result().name, ABORTED), runtime, witness)
-                    out.reason = f"the tree stopped ({runtime.completed.result().name}); " + out.reason
-                    return
-                await asyncio.sleep(0.05)
-            _finish(out, bb.get("goal_status"), runtime, witness)
-        else:
-            done = runtime.restart_tree()
-            status = (await done).name
-            _finish(out, FROM_TREE_STATUS.get(status, status), runtime, witness)
+    The tree is not ticking yet (``runtime.start(tick=False)``); this starts it.
+
+    A tree with the goal hand-off gets the goals through the runtime's goal intake
+    (``runtime.send_goal``), queued one behind the other: the same path as goals from the
+    NavigateToPose action and the goal topic, so a goal from a ROS client preempts them as it
+    would preempt its own, and outcomes (REFUSED, PREEMPTED, REJECTED...) are the intake's."""
+    if not uses_goal_handoff(runtime.tree):
+        for i, goal in enumerate(goals):  # a Nav2-style tree runs once per goal
+            bb = runtime.tree.root_blackboard
+            bb.set("goal", goal)
+            bb.set("goals", [goal])
+            outcomes[i].sent_at = runtime.clock()
+            status = (await runtime.restart_tree()).name
+            _finish(outcomes[i], FROM_TREE_STATUS.get(status, status), runtime, witness)
+        return
+    runtime.restart_tree()
+    handles = [runtime.send_goal(goal, preempt=False) for goal in goals]
+    for out, handle in zip(outcomes, handles, strict=True):
+        while not handle.done:
+            if out.sent_at is None and handle.started_at is not None:
+                out.sent_at = handle.started_at  # handed over: its time counts from here
+            if runtime.completed.done():  # the tree ended: nobody works on this goal or the next
+                status = runtime.completed.result().name
+                if handle.started_at is not None:
+                    out.sent_at = handle.started_at
+                    _finish(out, FROM_TREE_STATUS.get(status, ABORTED), runtime, witness)
+                    out.reason = f"the tree stopped ({status}); " + out.reason
+                return
+            await asyncio.wait({handle.result_future}, timeout=0.05)
+        result = handle.result
+        out.sent_at = handle.started_at if handle.started_at is not None else out.sent_at
+        _finish(out, result.outcome, runtime, witness, result.error_msg)
 
 
-def _finish(out: GoalOutcome, outcome: str, runtime: Any, witness: Any) -> None:
+GENERIC = ("", "aborted by the tree")  # the intake's words when the tree gave no reason
+
+
+def _finish(out: GoalOutcome, outcome: str, runtime: Any, witness: Any, message: str = "") -> None:
+    """Record how a goal ended; why, when it did not succeed: the intake's message (refused:
+    battery, preempted, rejected...) and what the tree saw (navigation error, failing node)."""
     out.outcome = outcome
     out.ended_at = runtime.clock()
-    if outcome != SUCCEEDED:
-        out.reason = witness.reason(since=out.sent_at)
+    if outcome == SUCCEEDED:
+        out.reason = "" if message in GENERIC else message  # e.g. "alternative goal used: ..."
+        return
+    parts = [] if message in GENERIC else [message]
+    if out.sent_at is not None:  # it reached the tree: what went wrong there
+        parts.append(witness.reason(since=out.sent_at))
         why = witness.to_dict(since=out.sent_at)
         out.failing_node, out.navigation_error = why["failing_node"], why["navigation_error"]
+    out.reason = "; ".join(parts)
 
 
 def mark_unfinished(outcomes: list[GoalOutcome], runtime: Any, witness: Any, duration: float | None) -> None:

@@ -2,8 +2,9 @@
 ``--summary-json``; and the exit code a script can trust.
 
 Outcomes of goals use one vocabulary (Nav2's action results, plus two for goals the run did
-not finish): SUCCEEDED, ABORTED, REFUSED, CANCELED, NOT_FINISHED (the run ended first),
-NOT_STARTED (never handed over). Angles are radians everywhere (goals in, poses out).
+not finish): SUCCEEDED, ABORTED, REFUSED, CANCELED, PREEMPTED (a newer goal, e.g. from a ROS
+client, took over), REJECTED (never accepted, e.g. a Nav2 node would not activate), NOT_FINISHED
+(the run ended first), NOT_STARTED (never handed over). Angles are radians everywhere (goals in, poses out).
 """
 
 from __future__ import annotations
@@ -15,8 +16,9 @@ from typing import Any
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 SUCCEEDED, ABORTED, REFUSED, CANCELED = "SUCCEEDED", "ABORTED", "REFUSED", "CANCELED"
+PREEMPTED, REJECTED = "PREEMPTED", "REJECTED"  # the goal intake's: a newer goal took over; never accepted
 NOT_FINISHED, NOT_STARTED = "NOT_FINISHED", "NOT_STARTED"
-OUTCOMES = (SUCCEEDED, ABORTED, REFUSED, CANCELED, NOT_FINISHED, NOT_STARTED)
+OUTCOMES = (SUCCEEDED, ABORTED, REFUSED, CANCELED, PREEMPTED, REJECTED, NOT_FINISHED, NOT_STARTED)
 
 # what a tree that completes per goal (Nav2-style) returns, in the goal vocabulary
 FROM_TREE_STATUS = {"SUCCESS": SUCCEEDED, "FAILURE": ABORTED}
@@ -69,6 +71,9 @@ def verdict(summary: Any, goals: list[GoalOutcome], last_error: str | None, inte
         reasons.append(f"every tick raised an error ({summary.tick_errors} of {summary.ticks})")
     elif last_error is not None:
         reasons.append(f"the last tick raised an error: {last_error}")
+    bringup = getattr(summary, "bringup", None)
+    if bringup and bringup.get("status") == "failed":
+        reasons.append(f"bring-up failed: {bringup.get('failed_node')}: {bringup.get('reason')}")
     for i, g in enumerate(goals):
         if g.outcome != SUCCEEDED:
             reasons.append(f"goal {i} {g.outcome}")
