@@ -284,9 +284,11 @@ class GoalIntake:
             detail = str(bb.get("goal_detail", default="") or "")
             msg = f"alternative goal used: {detail}" if detail else ""
             return GoalResult(GoalState.SUCCEEDED, "SUCCEEDED", NONE, msg)
-        if tree_status == "REFUSED":
+        if tree_status == "REFUSED":  # the battery (BatteryCanReach), or a goal refused outright (outside the map)
+            battery = not reason or "battery" in reason.lower()
             return GoalResult(GoalState.ABORTED, "REFUSED", UNKNOWN,
-                              "refused: battery" + (f" ({reason})" if reason else ""))
+                              ("refused: battery" + (f" ({reason})" if reason else "")) if battery
+                              else f"refused: {reason}")
         return GoalResult(GoalState.ABORTED, "ABORTED", self._error_code(), reason or "aborted by the tree")
 
     def _error_code(self) -> int:

@@ -43,11 +43,11 @@ def test_a_goal_outside_the_map_exits_1_and_says_why(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert code == 1 and data["result"] == "FAILED"
     goal = data["goals"][0]
-    assert goal["outcome"] == "ABORTED"
+    assert goal["outcome"] == "REFUSED"  # refused outright by the tree, without navigating
+    assert goal["reason"].startswith("refused: GOAL_OUTSIDE_MAP (204)")
     assert goal["navigation_error"]["code"] == 204 and goal["navigation_error"]["code_name"] == "GOAL_OUTSIDE_MAP"
     assert "GOAL_OUTSIDE_MAP (204)" in goal["reason"]
-    assert goal["failing_node"]["path"].startswith("mission/")
-    assert printed.startswith("result: FAILED (goal 0 ABORTED)")
+    assert printed.startswith("result: FAILED (goal 0 REFUSED)")
 
 
 def test_a_run_that_ends_before_the_goal_says_so(tmp_path, capsys):
