@@ -32,7 +32,7 @@ import structlog
 from .command_limits import CommandLimiter, MotionLimits, is_finite
 from .config import GateConfig
 from .messages import ZERO_TWIST, Twist
-from .twist_mux import INPUT_STREAM, LOCK_STREAM, MuxInput, TwistMux
+from .twist_mux import INPUT_STREAM, LOCK_STREAM, TwistMux
 
 if TYPE_CHECKING:
     from .backup import DataBackup
@@ -331,29 +331,28 @@ class DecisionGate:
         mux = self.mux
         lock_priority, lock_name = mux.lock(now) if mux.locks else (0, "")
         nav_fresh = self._nav_allowed and now - self._nav_stamp <= cfg.nav_stale_timeout
-        p_tree, p_nav = cfg.priorities["tree"], cfg.priorities["nav"]
-        best: tuple[int, str, Twist, str] | None = None
-        masked: list[str] = []
-        if self._tree is not None:
-            if p_tree < lock_priority:
-                masked.append(TREE)
-            elif now - self._tree_stamp <= cfg.tree_stale_timeout:
-                best = (p_tree, TREE, self._tree, "tree command")
+        priorities = cfg.priorities
+        p_tree, p_nav = priorities["tree"], priorities["nav"]
+        source, twist, reason, rank = IDLE, ZERO_TWIST, "", -1
+        tree = self._tree
+        if tree is not None and p_tree >= lock_priority:
+            rank = p_tree
+            if now - self._tree_stamp <= cfg.tree_stale_timeout:
+                source, twist, reason = TREE, tree, "tree command"
             else:
-                best = (p_tree, IDLE, ZERO_TWIST, "tree command stale")
-        if nav_fresh:
-            if p_nav < lock_priority:
-                masked.append(NAV)
-            elif best is None or p_nav > best[0]:
-                best = (p_nav, NAV, self._nav, "navigation command" if self._tree is None
-                        else "navigation command (priority over the tree)")
+                reason = "tree command stale"
+        if nav_fresh and p_nav >= lock_priority and p_nav > rank:
+            rank = p_nav
+            source, twist = NAV, self._nav
+            reason = "navigation command" if tree is None else "navigation command (priority over the tree)"
         if mux.inputs:
-            entry: MuxInput | None = mux.best(now, max(lock_priority - 1, best[0] if best else 0))
+            entry = mux.best(now, max(lock_priority - 1, rank))
             if entry is not None:
-                best = (entry.priority, entry.name, entry.command, f"{entry.name} input (priority {entry.priority})")
-            masked += mux.masked(now, lock_priority)
-        if best is not None:
-            return best[1], best[2], best[3]
+                return entry.name, entry.command, entry.reason
+        if rank >= 0:
+            return source, twist, reason
+        masked = [name for name, present, p in ((TREE, tree is not None, p_tree), (NAV, nav_fresh, p_nav))
+                  if present and p < lock_priority] + mux.masked(now, lock_priority)
         if masked:
             return LOCK, ZERO_TWIST, f"{mux.lock_reason(now, lock_name)} masks {', '.join(masked)}"
         if not self._nav_allowed:

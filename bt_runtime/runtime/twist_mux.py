@@ -48,6 +48,10 @@ class MuxInput:
     stamped: bool = False
     command: Twist = ZERO_TWIST
     stamp: float = -math.inf
+    reason: str = ""  # why it wins, for the gate's switch log
+
+    def __post_init__(self) -> None:
+        self.reason = f"{self.name} input (priority {self.priority})"
 
     def fresh(self, now: float) -> bool:
         if self.stamp == -math.inf:
@@ -85,6 +89,8 @@ class TwistMux:
         self.locks = {name: MuxLock(name, spec.topic, spec.priority, spec.timeout)
                       for name, spec in sorted(locks.items())}
         self._ranked = sorted(self.inputs.values(), key=lambda i: -i.priority)  # stable: name order on ties
+        self._armed: list[MuxLock] = []  # the locks that are or can become locked (per tick: usually none)
+        self._arm()
         top_lock = max(self.locks.values(), key=lambda lk: lk.priority, default=None)
         for entry in self._ranked:
             if top_lock is not None and entry.priority >= top_lock.priority:
@@ -106,12 +112,17 @@ class TwistMux:
         changed = lock.value != value
         lock.value = value
         lock.stamp = now
+        if changed:
+            self._arm()
         return changed
+
+    def _arm(self) -> None:
+        self._armed = [lk for lk in self.locks.values() if lk.value or lk.timeout > 0]
 
     def lock(self, now: float) -> tuple[int, str]:
         """(lock priority, the name of the lock that sets it); (0, "") when nothing is locked."""
         best, name = 0, ""
-        for lock in self.locks.values():
+        for lock in self._armed:
             if lock.priority > best and lock.locked(now):
                 best, name = lock.priority, lock.name
         return best, name

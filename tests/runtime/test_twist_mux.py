@@ -176,3 +176,23 @@ async def test_teleop_is_refused_when_non_finite_and_clamped(make_runtime):
         await asyncio.sleep(0.7)
         assert gate.source == "nav"
     await rt.stop()
+
+
+async def test_a_dead_critical_component_stops_teleop(make_runtime):
+    """The supervisor's DEAD e-stop (odometry failed two restarts) beats a joystick that keeps pushing."""
+    rt = make_runtime()
+    await rt.start()
+    gate, driver, sim = rt.gate, rt.driver, rt.driver.sim
+    sim.faults.set_restart_policy("odom", delay=0.2, fail_next=5)
+    async with publishing(lambda: driver.publish_command_input("teleop", 0.1, 0.0)):
+        await asyncio.sleep(0.5)
+        assert gate.source == "teleop" and gate.last_output == Twist(0.1, 0.0)
+        sim.crash("odom")
+        await asyncio.sleep(1.2)
+        assert gate.source == "teleop"  # failed, not yet dead: the operator keeps control
+        assert await rt.supervisor.restart("odom") is False
+        assert await rt.supervisor.restart("odom") is False
+        assert "odom dead" in gate.estop_reasons and gate.last_output.is_zero
+        await asyncio.sleep(0.5)
+        assert gate.source == "estop" and gate.last_output.is_zero
+    await rt.stop()
