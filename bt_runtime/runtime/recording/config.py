@@ -47,8 +47,10 @@ class RecordingOptions(BaseModel):
     diagnostics_period_s: float = Field(1.0, gt=0, description="robot seconds between /diagnostics")
     map_check_period_s: float = Field(0.5, gt=0, description="robot seconds between map-change checks")
     compression: str = Field("zstd", pattern="^(zstd|lz4|none)$")
-    tree_log: str = Field("changes", pattern="^(changes|all)$",
-                          description="'all': every tick's status changes (Nav2's RosTopicLogger); 'changes': "
-                                      "a tick whose changes repeat the previous tick's is not logged again")
+    tree_log: str = Field("states", pattern="^(states|changes|all)$",
+                          description="'states': after each tick, the nodes whose status changed since the last "
+                                      "tick (cheap); 'changes': every status transition (Nav2's RosTopicLogger), a "
+                                      "tick that repeats the previous one not logged again; 'all': every tick's "
+                                      "transitions (see tree_log.py for what each costs)")
     cmd_vel_repeat_s: float = Field(0.1, ge=0, description="an unchanged gate output (same command and "
                                     "source) is recorded again only after this many robot seconds (0: always)")

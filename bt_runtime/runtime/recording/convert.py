@@ -1,4 +1,5 @@
-"""The runtime's messages as ROS 2 messages (rosbags typestore classes), on the writer thread.
+"""The runtime's messages as ROS 2 messages, on the writer thread: CDR bytes for the high-rate
+types (through ``layout.py``), rosbags typestore messages for the others.
 
 Each converter takes ``(state, topic, t, payload)`` and returns ``[(topic, typename, msg)]``
 (one input may give several outputs: an odometry message also gives the odom -> base_link
@@ -17,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .config import Frames
+from .layout import Layout
 from .types import msg_class
 
 T = msg_class
@@ -83,81 +85,110 @@ def twist(linear: float, angular: float) -> Any:
 
 @dataclass
 class ConvertState:
-    """Conversion state of one writer thread. The hot types (imu, odometry, tf, twist) reuse one
-    message object each, filled in place: the message is serialized before the next conversion,
-    and building nested message objects costs as much as serializing them."""
+    """Conversion state of one writer thread. The high-rate types (imu, odometry, tf, twist,
+    scan) are encoded through a ``Layout`` each (``layout.py``: rosbags' bytes of a template
+    message with the changing fields rewritten), made on first use and kept here."""
 
     frames: Frames = field(default_factory=Frames)
     tf_topic: str = "/tf"
     odom_pose: tuple[float, float, float] | None = None  # last odom -> base_link
-    templates: dict[str, Any] = field(default_factory=dict)
-    sizes: dict[int, int | None] = field(default_factory=dict)  # id(template) -> CDR size, once known
+    layouts: dict[Any, Layout] = field(default_factory=dict)
 
-    def template(self, key: str, make: Callable[[], Any]) -> Any:
-        msg = self.templates.get(key)
-        if msg is None:
-            msg = self.templates[key] = make()
-            self.sizes[id(msg)] = None
-        return msg
+    def layout(self, key: Any, make: Callable[[], Layout]) -> Layout:
+        found = self.layouts.get(key)
+        if found is None:
+            found = self.layouts[key] = make()
+        return found
 
 
-def _set_stamp(time_msg: Any, t: float) -> None:
-    time_msg.sec, time_msg.nanosec = divmod(int(round(t * 1e9)), 1_000_000_000)
+def _stamp_ns(t: float) -> tuple[int, int]:
+    return divmod(int(round(t * 1e9)), 1_000_000_000)
 
 
-def _set_pose(p: Any, x: float, y: float, yaw: float) -> None:
-    p.position.x, p.position.y = float(x), float(y)
-    p.orientation.z, p.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+def _fields(prefix: tuple[str | int, ...], names: str, code: str = "d") -> list[tuple[tuple[str | int, ...], str]]:
+    return [((*prefix, name), code) for name in names]
+
+
+STAMP = _fields(("header", "stamp"), ("sec",), "i") + _fields(("header", "stamp"), ("nanosec",), "I")
+# pose: position x y z, orientation x y z w (adjacent on the wire: one slot run)
+POSE = _fields(("pose", "pose", "position"), "xyz") + _fields(("pose", "pose", "orientation"), "xyzw")
+TWIST = _fields(("linear",), "xyz") + _fields(("angular",), "xyz")
+
+
+def odometry_layout(frame: str, child: str) -> Layout:
+    msg = Odometry(header=Header(stamp=Time(0, 0), frame_id=frame), child_frame_id=child,
+                   pose=PoseWithCovariance(pose=pose(0.0, 0.0, 0.0), covariance=COV36.copy()),
+                   twist=TwistWithCovariance(twist=twist(0.0, 0.0), covariance=COV36.copy()))
+    return Layout("nav_msgs/msg/Odometry", msg, STAMP + POSE + [(("twist", "twist", *p), c) for p, c in TWIST])
+
+
+def tf_layout(parent: str, child: str) -> Layout:
+    msg = TFMessage(transforms=[transform(0.0, parent, child, 0.0, 0.0, 0.0)])
+    first = ("transforms", 0)
+    return Layout("tf2_msgs/msg/TFMessage", msg,
+                  [((*first, *p), c) for p, c in STAMP]
+                  + _fields((*first, "transform", "translation"), "xyz")
+                  + _fields((*first, "transform", "rotation"), "xyzw"))
+
+
+def imu_layout(frame: str) -> Layout:
+    msg = Imu(header=Header(stamp=Time(0, 0), frame_id=frame), orientation=quat(0.0),
+              orientation_covariance=COV9.copy(), angular_velocity=Vector3(x=0.0, y=0.0, z=0.0),
+              angular_velocity_covariance=COV9.copy(), linear_acceleration=Vector3(x=0.0, y=0.0, z=0.0),
+              linear_acceleration_covariance=COV9.copy())
+    return Layout("sensor_msgs/msg/Imu", msg, STAMP + _fields(("orientation",), "xyzw")
+                  + _fields(("angular_velocity",), "xyz") + _fields(("linear_acceleration",), "xyz"))
+
+
+def twist_layout() -> Layout:
+    return Layout("geometry_msgs/msg/Twist", twist(0.0, 0.0), TWIST)
+
+
+SCAN_FLOATS = ("angle_min", "angle_max", "angle_increment", "time_increment", "scan_time", "range_min", "range_max")
+
+
+def scan_layout(frame: str, n: int) -> Layout:
+    msg = LaserScan(header=Header(stamp=Time(0, 0), frame_id=frame), angle_min=0.0, angle_max=0.0,
+                    angle_increment=0.0, time_increment=0.0, scan_time=0.0, range_min=0.0, range_max=0.0,
+                    ranges=np.zeros(n, np.float32), intensities=EMPTY32)
+    ranges = [(("ranges", 0), f"{n}f")] if n else []
+    return Layout("sensor_msgs/msg/LaserScan", msg, STAMP + [((name,), "f") for name in SCAN_FLOATS] + ranges)
 
 
 # -- sensors ------------------------------------------------------------------------------------
 
 def scan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    ranges = np.asarray(m.ranges, dtype=np.float32)
+    ranges = np.ascontiguousarray(m.ranges, dtype="<f4")
     n = len(ranges)
-    msg = LaserScan(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.laser),
-                    angle_min=float(m.angle_min),
-                    angle_max=float(m.angle_min + m.angle_increment * max(n - 1, 0)),
-                    angle_increment=float(m.angle_increment), time_increment=0.0, scan_time=0.0,
-                    range_min=float(m.range_min), range_max=float(m.range_max), ranges=ranges,
-                    intensities=EMPTY32)
-    return [(topic, "sensor_msgs/msg/LaserScan", msg)]
+    layout = s.layout(("scan", n), lambda: scan_layout(s.frames.laser, n))
+    sec, ns = _stamp_ns(m.stamp)
+    angle_min, step = float(m.angle_min), float(m.angle_increment)
+    values = (sec, ns, angle_min, angle_min + step * max(n - 1, 0), step, 0.0, 0.0, float(m.range_min),
+              float(m.range_max))
+    data = layout.encode(*values, ranges.tobytes()) if n else layout.encode(*values)
+    return [(topic, "sensor_msgs/msg/LaserScan", data)]
 
 
-def _odometry(frame: str, child: str) -> Any:
-    return Odometry(header=Header(stamp=Time(0, 0), frame_id=frame), child_frame_id=child,
-                    pose=PoseWithCovariance(pose=pose(0.0, 0.0, 0.0), covariance=COV36),
-                    twist=TwistWithCovariance(twist=twist(0.0, 0.0), covariance=COV36))
+def _odometry_bytes(layout: Layout, m: Any) -> bytes:
+    p, tw = m.pose, m.twist
+    sec, ns = _stamp_ns(m.stamp)
+    half = p.yaw / 2.0
+    return layout.encode(sec, ns, float(p.x), float(p.y), 0.0, 0.0, 0.0, math.sin(half), math.cos(half),
+                         float(tw.linear), 0.0, 0.0, 0.0, 0.0, float(tw.angular))
 
 
-def _fill_odometry(msg: Any, m: Any) -> Any:
-    p = m.pose
-    _set_stamp(msg.header.stamp, m.stamp)
-    _set_pose(msg.pose.pose, p.x, p.y, p.yaw)
-    tw = msg.twist.twist
-    tw.linear.x, tw.angular.z = float(m.twist.linear), float(m.twist.angular)
-    return msg
-
-
-def _tf_template(parent: str, child: str) -> Any:
-    return TFMessage(transforms=[transform(0.0, parent, child, 0.0, 0.0, 0.0)])
-
-
-def _fill_tf(msg: Any, t: float, x: float, y: float, yaw: float) -> Any:
-    tf = msg.transforms[0]
-    _set_stamp(tf.header.stamp, t)
-    tr = tf.transform
-    tr.translation.x, tr.translation.y = float(x), float(y)
-    tr.rotation.z, tr.rotation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
-    return msg
+def _tf_bytes(layout: Layout, t: float, x: float, y: float, yaw: float) -> bytes:
+    sec, ns = _stamp_ns(t)
+    half = yaw / 2.0
+    return layout.encode(sec, ns, float(x), float(y), 0.0, 0.0, 0.0, math.sin(half), math.cos(half))
 
 
 def odom(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
     p = m.pose
     s.odom_pose = (p.x, p.y, p.yaw)
-    msg = _fill_odometry(s.template("odom", lambda: _odometry(f.odom, f.base)), m)
-    tf = _fill_tf(s.template("tf_odom", lambda: _tf_template(f.odom, f.base)), m.stamp, p.x, p.y, p.yaw)
+    msg = _odometry_bytes(s.layout("odom", lambda: odometry_layout(f.odom, f.base)), m)
+    tf = _tf_bytes(s.layout("tf_odom", lambda: tf_layout(f.odom, f.base)), m.stamp, p.x, p.y, p.yaw)
     return [(topic, "nav_msgs/msg/Odometry", msg), (s.tf_topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
@@ -172,23 +203,17 @@ def localized(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     x = p.x - (c * ox - sn * oy)
     y = p.y - (sn * ox + c * oy)
     f = s.frames
-    tf = _fill_tf(s.template("tf_map", lambda: _tf_template(f.map, f.odom)), m.stamp, x, y, yaw)
+    tf = _tf_bytes(s.layout("tf_map", lambda: tf_layout(f.map, f.odom)), m.stamp, x, y, yaw)
     return [(topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
-def _imu(frame: str) -> Any:
-    return Imu(header=Header(stamp=Time(0, 0), frame_id=frame), orientation=quat(0.0), orientation_covariance=COV9,
-               angular_velocity=Vector3(x=0.0, y=0.0, z=0.0), angular_velocity_covariance=COV9,
-               linear_acceleration=Vector3(x=0.0, y=0.0, z=0.0), linear_acceleration_covariance=COV9)
-
-
 def imu(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    msg = s.template("imu", lambda: _imu(s.frames.imu))
-    _set_stamp(msg.header.stamp, m.stamp)
-    msg.orientation.z, msg.orientation.w = math.sin(m.yaw / 2.0), math.cos(m.yaw / 2.0)
-    msg.angular_velocity.z = float(m.yaw_rate)
-    msg.linear_acceleration.x, msg.linear_acceleration.y = float(m.accel_x), float(m.accel_y)
-    return [(topic, "sensor_msgs/msg/Imu", msg)]
+    layout = s.layout("imu", lambda: imu_layout(s.frames.imu))
+    sec, ns = _stamp_ns(m.stamp)
+    half = m.yaw / 2.0
+    data = layout.encode(sec, ns, 0.0, 0.0, math.sin(half), math.cos(half), 0.0, 0.0, float(m.yaw_rate),
+                         float(m.accel_x), float(m.accel_y), 0.0)
+    return [(topic, "sensor_msgs/msg/Imu", data)]
 
 
 def battery(s: ConvertState, topic: str, t: float, m: Any) -> Output:
@@ -239,9 +264,8 @@ def tf_static(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 # -- commands -----------------------------------------------------------------------------------
 
 def command(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    msg = s.template("twist", lambda: twist(0.0, 0.0))
-    msg.linear.x, msg.angular.z = float(m.linear), float(m.angular)
-    return [(topic, "geometry_msgs/msg/Twist", msg)]
+    data = s.layout("twist", twist_layout).encode(float(m.linear), 0.0, 0.0, 0.0, 0.0, float(m.angular))
+    return [(topic, "geometry_msgs/msg/Twist", data)]
 
 
 # -- the autonomy layer -------------------------------------------------------------------------
@@ -294,7 +318,7 @@ def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
 
 def odometry_like(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
-    msg = _fill_odometry(s.template("odometry:" + topic, lambda: _odometry(f.map, f.base)), m)
+    msg = _odometry_bytes(s.layout(("odometry", topic), lambda: odometry_layout(f.map, f.base)), m)
     return [(topic, "nav_msgs/msg/Odometry", msg)]
 
 

@@ -2,8 +2,8 @@
 
 ``put`` is all the loop pays per message: a length check and a deque append (no conversion,
 no serialization, no I/O). When the queue is full the message is dropped and counted per
-topic, never waited for. The thread converts (``convert``), serializes once (``types``) and
-logs the bytes on the topic's channel, which feeds the bag's open segment and the live server;
+topic, never waited for. The thread converts (``convert``: CDR bytes for the high-rate types,
+rosbags messages serialized once by ``types`` for the others) and logs the bytes on the topic's channel, which feeds the bag's open segment and the live server;
 every ``flush_interval_s`` wall seconds it closes the bag's segment. It works in slices of at
 most ``slice_s`` (0.5 ms) and then releases the GIL; in real time it also keeps out of the
 millisecond before each tick deadline (``tick_guard``), so the tick finds the GIL free.
@@ -142,13 +142,7 @@ class RecordPipeline:
                     channel = self.channels.add(name, typename, latched=latched)
                 if not channel.has_sinks() and name not in self.channels.latched:
                     continue  # live view only, and nobody subscribed to this topic
-                sizes = self.state.sizes
-                key = id(msg)
-                if key in sizes:  # a reused message: its size never changes
-                    data = serialize(msg, typename, sizes[key])
-                    sizes[key] = len(data)
-                else:
-                    data = serialize(msg, typename)
+                data = msg if type(msg) is bytes else serialize(msg, typename)
                 t_ns = max(0, int(round(t * 1e9)))
                 if bag is not None:
                     bag.count(name, t_ns)

@@ -5,7 +5,7 @@ messages are immutable once published, so the writer thread may convert them lat
 the driver's sensor streams, the gate's output (``/cmd_vel``) and its source switches, the
 navigation command and the tree's command (one topic per command source), the supervisor's
 events and (every ``diagnostics_period_s``) every component's health, the tree's status
-changes (one ``BehaviorTreeLog`` per tick, as Nav2 publishes them), the static transforms, and
+changes (``tree_log.py``), the static transforms, and
 whatever the hooks add (the simulator's ground truth, faults and map).
 """
 
@@ -21,6 +21,7 @@ import structlog
 from .config import RecordingOptions
 from .hooks import RecordingHooks
 from .pipeline import RecordPipeline
+from .tree_log import tree_log
 
 if TYPE_CHECKING:
     from ..app import AutonomyRuntime
@@ -43,9 +44,7 @@ class Recorder:
         self.clock = runtime.clock
         self._unsubscribe: list[Callable[[], None]] = []
         self._task: asyncio.Task | None = None
-        self._tree_events: list[tuple[float, Any, Any, Any]] = []
-        self._last_tick_keys: list[tuple[Any, Any, Any]] | None = None
-        self.repeated_ticks = 0  # ticks not logged because they repeated the previous one
+        self.tree_log: Any = None  # tree_log.TreeStateLog or TreeTransitionLog
         self._last_output: tuple[Any, str] | None = None
         self._last_output_t = -1e18
         self._switches_seen = 0
@@ -73,7 +72,7 @@ class Recorder:
         if topics.supervisor_events:
             rt.supervisor.add_listener(self._on_supervisor_event)
         if rt.tree is not None and topics.behavior_tree_log:
-            self._unsubscribe.append(rt.tree.add_status_observer(self._on_status))
+            self.tree_log = tree_log(self.options.tree_log, rt.tree, clock, self._put_tree_log)
             if rt.tick_loop is not None:
                 rt.tick_loop.on_tick.append(self._on_tick)
         if topics.tf_static:
@@ -118,7 +117,8 @@ class Recorder:
                 rt.tick_loop.on_tick.remove(self._on_tick)
         if self._task is not None:
             self._task.cancel()
-        self._flush_tree_log()
+        if self.tree_log is not None:
+            self.tree_log.close()
         self._diagnostics()
 
     # -- callbacks (event loop) --------------------------------------------------------------------
@@ -149,27 +149,13 @@ class Recorder:
         if self.attached:  # the supervisor has no remove_listener: a detached recorder ignores it
             self.pipeline.put("supervisor_event", self.options.topics.supervisor_events, event.t, event)
 
-    def _on_status(self, stamp: float, node: Any, previous: Any, new: Any) -> None:
-        self._tree_events.append((stamp, node, previous, new))  # names are looked up off the loop
-
     def _on_tick(self, _status: Any) -> None:
         if self.pipeline.tick_guard is None and self.runtime.realtime:
             rt = self.runtime  # the loop's clock is time.monotonic in real time
             self.pipeline.tick_guard = (rt.clock(), 1.0 / rt.config.tick.rate_hz)
-        if self._tree_events:
-            self._flush_tree_log()
+        self.tree_log.after_tick()
 
-    def _flush_tree_log(self) -> None:
-        events = self._tree_events
-        if not events:
-            return
-        self._tree_events = []
-        if self.options.tree_log == "changes":
-            keys = [e[1:] for e in events]  # (node, previous, new): the same objects tick after tick
-            if keys == self._last_tick_keys:
-                self.repeated_ticks += 1
-                return
-            self._last_tick_keys = keys
+    def _put_tree_log(self, events: list[tuple[float, Any, Any, Any]]) -> None:
         self.pipeline.put("tree_log", self.options.topics.behavior_tree_log, self.clock(), events)
 
     # -- periodic (robot time) ---------------------------------------------------------------------
@@ -183,7 +169,8 @@ class Recorder:
                 self._diagnostics()
                 next_diag = now + opts.diagnostics_period_s
             self._check_map()
-            self._flush_tree_log()  # status changes outside ticks (halts, restarts)
+            if self.tree_log is not None:
+                self.tree_log.flush()  # status changes outside ticks (halts, restarts)
             await asyncio.sleep(period)
 
     def _diagnostics(self) -> None:

@@ -34,14 +34,14 @@ def test_converted_messages_read_back_with_the_jazzy_store(jazzy):
     state = convert.ConvertState()
     odom = Odometry(12.5, Pose2D(1.0, -2.0, 0.5), Twist(0.2, -0.1))
     (topic, typename, msg), (tf_topic, tf_type, tf) = convert.odom(state, "/odom", 12.5, odom)
-    back = jazzy.deserialize_cdr(types.serialize(msg, typename), typename)
+    back = jazzy.deserialize_cdr(msg, typename)
     assert (back.header.stamp.sec, back.header.stamp.nanosec) == (12, 500_000_000)
     assert (back.pose.pose.position.x, back.pose.pose.position.y) == (1.0, -2.0)
     assert back.twist.twist.linear.x == 0.2 and back.twist.twist.angular.z == -0.1
-    tf_back = jazzy.deserialize_cdr(types.serialize(tf, tf_type), tf_type)
+    tf_back = jazzy.deserialize_cdr(tf, tf_type)
     assert (tf_back.transforms[0].header.frame_id, tf_back.transforms[0].child_frame_id) == ("odom", "base_link")
     imu = convert.imu(state, "/imu", 1.0, Imu(1.0, 0.3, 0.1, 0.0, yaw=0.0))[0]
-    assert jazzy.deserialize_cdr(types.serialize(imu[2], imu[1]), imu[1]).angular_velocity.z == 0.3
+    assert jazzy.deserialize_cdr(imu[2], imu[1]).angular_velocity.z == 0.3
 
 
 def test_localized_pose_gives_map_to_odom_that_composes_to_it():
@@ -49,6 +49,6 @@ def test_localized_pose_gives_map_to_odom_that_composes_to_it():
 
     state = convert.ConvertState()
     convert.odom(state, "/odom", 1.0, Odometry(1.0, Pose2D(1.0, 0.0, 0.0), Twist()))
-    (_, _, tf), = convert.localized(state, "/tf", 1.0, LocalizedPose(1.0, Pose2D(3.0, 1.0, 0.0)))
-    t = tf.transforms[0].transform.translation
+    (_, tf_type, tf), = convert.localized(state, "/tf", 1.0, LocalizedPose(1.0, Pose2D(3.0, 1.0, 0.0)))
+    t = types.typestore().deserialize_cdr(tf, tf_type).transforms[0].transform.translation
     assert (t.x, t.y) == (2.0, 1.0)  # map -> odom: 2 m along x, 1 m along y
