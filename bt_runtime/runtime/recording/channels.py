@@ -7,6 +7,7 @@ the SDK's native writer (about 7 us a message, a third of a pure-Python writer).
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Any
 
 from .types import schema
@@ -25,7 +26,14 @@ def offered_qos(latched: bool) -> list[dict[str, Any]]:
 def dump_yaml(data: Any) -> str:
     import yaml
 
-    return yaml.safe_dump(data, default_flow_style=False, sort_keys=False)
+    dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml: ~20x faster than the pure-Python emitter
+    return yaml.dump(data, Dumper=dumper, default_flow_style=False, sort_keys=False)
+
+
+@cache
+def offered_qos_yaml(latched: bool) -> str:
+    """The channel metadata rosbag2 readers expect (``offered_qos_profiles``), made once."""
+    return dump_yaml(offered_qos(latched)).strip()
 
 
 class ChannelSet:
@@ -45,7 +53,7 @@ class ChannelSet:
             if known != typename:
                 raise ValueError(f"topic {topic} is {known}, cannot also be {typename}")
             return self.channels[topic]
-        qos = dump_yaml(offered_qos(latched)).strip()
+        qos = offered_qos_yaml(latched)
         channel = fox.Channel(topic, message_encoding="cdr", context=self.context,
                               schema=fox.Schema(name=typename, encoding="ros2msg", data=schema(typename).encode()),
                               metadata={"offered_qos_profiles": qos})

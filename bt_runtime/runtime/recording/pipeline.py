@@ -134,16 +134,15 @@ class RecordPipeline:
                 channel = channels.get(topic)
                 if channel is not None and not channel.has_sinks() and topic not in self.channels.latched:
                     return
-            outputs = CONVERTERS[kind](self.state, topic, t, payload)
-            for name, typename, msg in outputs:
+            t_ns = max(0, int(round(t * 1e9)))
+            for name, typename, msg in CONVERTERS[kind](self.state, topic, t, payload):
                 channel = channels.get(name)
                 if channel is None:
                     latched = name in self.latched_topics or typename in LATCHED_TYPES
                     channel = self.channels.add(name, typename, latched=latched)
-                if not channel.has_sinks() and name not in self.channels.latched:
+                if bag is None and not channel.has_sinks() and name not in self.channels.latched:
                     continue  # live view only, and nobody subscribed to this topic
                 data = msg if type(msg) is bytes else serialize(msg, typename)
-                t_ns = max(0, int(round(t * 1e9)))
                 if bag is not None:
                     bag.count(name, t_ns)
                 channel.log(data, log_time=t_ns)

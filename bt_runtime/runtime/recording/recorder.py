@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import structlog
 
+from ..twist_mux import INPUT_STREAM
 from .config import RecordingOptions
 from .hooks import RecordingHooks
 from .pipeline import RecordPipeline
@@ -31,7 +32,7 @@ log = structlog.get_logger("bt_runtime.recording")
 # driver stream -> (converter kind, TopicNames field)
 SENSOR_STREAMS = (("scan", "scan", "scan"), ("odom", "odom", "odom"), ("pose", "pose", "tf"),
                   ("imu", "imu", "imu"), ("battery", "battery", "battery"), ("plan", "plan", "plan"))
-GATE_SOURCE_TOPIC = {"tree": "tree", "teleop": "teleop"}  # gate sources with a command of their own
+GATE_SOURCE_TOPIC = {"tree": "tree"}  # gate sources whose command the gate holds (no stream of their own)
 
 
 class Recorder:
@@ -63,6 +64,10 @@ class Recorder:
         nav_topic = self._source_topic("navigation")
         if nav_topic:
             self._subscribe("nav_cmd_vel", "command", nav_topic)
+        for name in rt.gate.mux.inputs:  # twist_mux-style inputs (teleop...): every command each one sent
+            topic = self._source_topic(name)
+            if topic:
+                self._subscribe(INPUT_STREAM + name, "command", topic)
         for spec in self.hooks.streams:
             self._subscribe(spec.stream, spec.kind, spec.topic, spec.select, spec.source)
         gate = rt.gate

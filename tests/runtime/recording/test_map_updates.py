@@ -1,5 +1,5 @@
-"""/map is recorded at start and again when the navigation map changes (a collision mark), and
-the drops of a full queue are counted, not waited for."""
+"""/map is recorded at start and again when the navigation map changes (a collision mark), each
+teleop command goes on its own topic, and the drops of a full queue are counted, not waited for."""
 
 from __future__ import annotations
 
@@ -65,3 +65,22 @@ def test_a_full_queue_drops_and_counts(tmp_path):
         pipeline.RecordPipeline.start = original
     assert report["dropped"].get("/odom", 0) > 0 and report["dropped"].get("/imu", 0) > 0
     assert report["message_count"] == 0  # the run went on: 2 s of robot time with nothing written
+
+
+def test_each_teleop_command_is_recorded_on_its_own_topic(tmp_path):
+    sent = [(0.1 * k, -0.05 * k) for k in range(1, 6)]
+
+    async def body(driver) -> None:
+        await asyncio.sleep(0.5)
+        for linear, angular in sent:
+            driver.publish_command_input("teleop", linear, angular)
+            await asyncio.sleep(0.2)
+
+    report = _record(tmp_path / "bag", RecordingOptions(), body)
+    assert report["messages"]["/cmd_vel/teleop"] == len(sent)
+    with AnyReader([tmp_path / "bag"]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/cmd_vel/teleop"]
+        assert conns[0].msgtype == "geometry_msgs/msg/Twist"
+        got = [(m.linear.x, m.angular.z) for m in
+               (reader.deserialize(raw, c.msgtype) for c, _t, raw in reader.messages(conns))]
+    assert got == sent  # float64 on the wire: exact
