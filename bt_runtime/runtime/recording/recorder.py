@@ -137,9 +137,7 @@ class Recorder:
         self._last_output, self._last_output_t = key, now
         if topics.cmd_vel:
             put("command", topics.cmd_vel, now, twist)
-        own = GATE_SOURCE_TOPIC.get(source)
-        if own is None and source in self.runtime.gate.mux.inputs:  # any configured gate input (joystick...)
-            own = source
+        own = GATE_SOURCE_TOPIC.get(source)  # gate inputs (teleop, joystick...) are recorded from their streams
         if own is not None:
             topic = self._source_topic(own)
             if topic:  # the source's own command, before the gate's limits
