@@ -20,9 +20,22 @@ from bt_runtime.runtime.messages import BatteryState, RobotInfo, Twist
 
 
 class EnergyModel:
-    prior_sigma = 0.15  # how far a unit may be from the nominal model, a priori
+    # How far a unit may be from the nominal model before anything is measured: units of one
+    # model draw within about +-10 % of their datasheet consumption (motor and electronics
+    # tolerances), so 2 sigma = 16 % covers them; a wider prior only refuses goals the robot can
+    # make. The measurements then shrink it.
+    prior_sigma = 0.08
     soc_sigma = 0.1  # percentage points of noise on one state-of-charge reading
     margin_sigmas = 2.0
+
+    @classmethod
+    def factor_bounds(cls, early_drift_sigmas: float = 1.0) -> tuple[float, float]:
+        """The factor a check can use in the first seconds, before the readings have told much:
+        at least the nominal minus the unit spread (``1 - margin_sigmas * prior_sigma``), at most
+        the prior's margin plus ``early_drift_sigmas`` priors for what a few noisy readings can
+        move the estimate. For whoever must predict the layer's answers (the variant generator)."""
+        spread = cls.margin_sigmas * cls.prior_sigma
+        return 1.0 - spread, 1.0 + spread + early_drift_sigmas * cls.prior_sigma
 
     def __init__(self, robot: RobotInfo) -> None:
         self.robot = robot

@@ -343,52 +343,97 @@ def collision_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
 
 # -- battery -------------------------------------------------------------------------------------
 
-def _required_percent(world: str, robot: str, start, goal, capacity_ah: float) -> float:
-    """What the layer's battery check asks for (nominal model, reserve 10 %, factor 1.5)."""
-    from bt_runtime.runtime.messages import Pose2D, RobotInfo
-    from nodes.battery import energy_for_path, path_turning
+# What the battery check of trees/autonomy.xml asks for (nodes/battery.py): the energy of the
+# planned path by the nominal model, times the learned factor (nodes/energy.py), times 1.5, plus
+# a 10 % reserve, converted to percent at the measured voltage.
+SAFETY_FACTOR, RESERVE = 1.5, 10.0
+PATH_SLACK = 0.05  # the layer plans on its own costmap from its estimated pose: +-5 % path energy
+SOC_NOISE = 0.3  # three sigmas of the state-of-charge reading's noise (percentage points)
+CHECK_BY = 3.0  # s: the near goal is checked by then (far goal at 1 s, refused, near goal 1 s later)
+
+
+def _battery_info(robot: str, capacity_ah: float):
+    from bt_runtime.runtime.messages import RobotInfo
 
     from ..robot import load_profile
 
-    planner, _ = _planner(world, robot)
-    res = planner.plan(Pose2D(*start[:2]), Pose2D(*goal[:2]))
-    if not res.ok or res.points is None or len(res.points) < 2:
-        return math.inf
     profile = load_profile(robot)
     b = profile.battery
     info = RobotInfo(radius=profile.radius, max_linear=profile.max_linear, max_angular=profile.max_angular,
                      capacity_ah=capacity_ah, voltage_nominal=(b.voltage_full + b.voltage_empty) / 2,
                      idle_power_w=b.idle_power_w, k_linear=b.k_linear, k_angular=b.k_angular)
+    return info, b
+
+
+def _nominal_wh(world: str, robot: str, start, goal, info) -> float:
+    """The nominal model's energy (Wh) for the static-map plan from ``start`` to ``goal``."""
+    from bt_runtime.runtime.messages import Pose2D
+    from nodes.battery import energy_for_path, path_turning
+
+    planner, _ = _planner(world, robot)
+    res = planner.plan(Pose2D(*start[:2]), Pose2D(*goal[:2]))
+    if not res.ok or res.points is None or len(res.points) < 2:
+        return math.inf
     pts = res.points
     length = float(np.hypot(*np.diff(pts[:, :2], axis=0).T).sum())
-    energy = energy_for_path(length, path_turning(pts, start[2]), min(info.max_linear, SPEED),
-                             min(info.max_angular, 1.0), info)
-    return info.percent_for(energy) * 1.5 + 10.0
+    return energy_for_path(length, path_turning(pts, start[2]), min(info.max_linear, SPEED),
+                           min(info.max_angular, 1.0), info)
+
+
+def _required_percent(info, spec, energy_wh: float, factor: float, soc: float) -> float:
+    return info.percent_for(energy_wh * factor, spec.voltage(soc)) * SAFETY_FACTOR + RESERVE
+
+
+def _battery_band(info, spec, far_wh: float, near_wh: float) -> tuple[float, float] | None:
+    """The initial states of charge for which the layer's documented model must refuse the far
+    goal and accept the near one, whatever this unit's true consumption and however the first
+    noisy readings move the estimate (``EnergyModel.factor_bounds``); None if there are none.
+
+    Far: refused even for the thriftiest unit the model allows (``low``): then refusing is right,
+    not merely cautious. Near: accepted at the most cautious factor the check can use (``high``),
+    after ``CHECK_BY`` s of idle drain of the hungriest unit, with the reading's noise."""
+    from nodes.energy import EnergyModel
+
+    low, high = EnergyModel.factor_bounds()
+    hi = None
+    for soc in np.arange(95.0, RESERVE, -0.25):  # the far goal's need falls with the voltage
+        if soc < _required_percent(info, spec, far_wh * (1 - PATH_SLACK), low, soc) - SOC_NOISE:
+            hi = float(soc)
+            break
+    if hi is None:
+        return None
+    drain = info.percent_for(info.idle_power_w * high * CHECK_BY / 3600.0, spec.voltage_empty)
+    for soc in np.arange(RESERVE, hi + 1e-9, 0.25):
+        checked = soc - drain
+        if checked - SOC_NOISE >= _required_percent(info, spec, near_wh * (1 + PATH_SLACK), high, checked):
+            return (float(soc), hi) if hi - soc >= 0.5 else None
+    return None
 
 
 def battery_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
-    """A far goal just beyond the battery's range (with its reserve), then a near one within it:
-    the state of charge lies between what the two need, at least 25 % of the gap from each."""
+    """A far goal beyond the battery's range (with its reserve), then a near one within it: the
+    state of charge is drawn uniformly from the band where the layer's documented energy model
+    (nodes/energy.py) must refuse the first and accept the second (``_battery_band``)."""
     world = "apartment"
     robot = _choice(rng, ROBOTS)
     capacity = 0.1
+    info, spec = _battery_info(robot, capacity)
     for _ in range(100):
         start, far, far_len = _trip(rng, world, robot, min_len=3.0, max_len=9.0)
         near = _free_pose(rng, world, start, 1.2, 0.4)
         near_len = path_length(world, robot, start[:2], near[:2])
         if not 0.4 <= near_len <= 2.0:
             continue
-        need_far = _required_percent(world, robot, start, far, capacity)
-        need_near = _required_percent(world, robot, start, near, capacity)
-        gap = need_far - need_near
-        if gap > 2.0 and need_far < 95.0:
-            soc = float(rng.uniform(need_near + 0.25 * gap, need_far - 0.25 * gap))
+        band = _battery_band(info, spec, _nominal_wh(world, robot, start, far, info),
+                             _nominal_wh(world, robot, start, near, info))
+        if band is not None:
+            soc = float(rng.uniform(*band))
             break
     else:
         raise RuntimeError("no battery variant found")
-    return _spec(f"V{index:04d}_battery", "II", f"battery at {soc:.1f} %: far goal {far_len:.1f} m (needs "
-                 f"{need_far:.1f} %) refused, near goal {near_len:.1f} m (needs {need_near:.1f} %) reached "
-                 f"({robot})", requirements=["fn_req9"], world=world,
+    return _spec(f"V{index:04d}_battery", "II", f"battery at {soc:.1f} % (band {band[0]:.1f}-{band[1]:.1f} %): "
+                 f"far goal {far_len:.1f} m refused, near goal {near_len:.1f} m reached ({robot})",
+                 requirements=["fn_req9"], world=world,
                  robot=robot, robot_overrides={"battery.capacity_ah": capacity, "battery.initial_soc": round(soc, 2)},
                  start=_pose(start),
                  goals=[{"at": 1.0, "pose": _pose(far)},

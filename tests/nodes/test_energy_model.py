@@ -63,3 +63,26 @@ def test_charging_starts_a_new_window_and_bad_readings_are_ignored():
     model.on_battery(BatteryState(40.0, float("nan"), float("nan")), 40.0)  # ignored
     model.on_battery(BatteryState(50.0, 11.1, 60.0), 50.0)  # charged meanwhile
     assert model.scale == 1.0 and model.sigma == model.prior_sigma
+
+
+def test_the_first_seconds_of_noisy_readings_keep_the_factor_within_its_documented_bounds():
+    """The variant generator predicts the layer's battery answers from ``factor_bounds``: a few
+    noisy readings of a small battery (the scenarios' 0.1 Ah) at any unit spread must keep the
+    factor inside them."""
+    import numpy as np
+
+    low, high = EnergyModel.factor_bounds()
+    info = RobotInfo(capacity_ah=0.1, idle_power_w=8.0)
+    worst = [np.inf, -np.inf]
+    for seed in range(200):
+        rng = np.random.default_rng(seed)
+        truth = rng.uniform(0.9, 1.1)
+        model = EnergyModel(info)
+        soc = 20.0
+        for t in range(4):  # 1 Hz readings until the near goal's check
+            model.on_battery(BatteryState(float(t), 11.0, soc + rng.normal(0.0, model.soc_sigma)), float(t))
+            soc -= info.percent_for(info.idle_power_w * truth / 3600.0, 11.0)
+        worst = [min(worst[0], model.factor), max(worst[1], model.factor)]
+        assert model.factor >= low
+    assert worst[1] <= high
+    assert worst[0] >= 1.0  # before the readings say much, never below the nominal model
