@@ -67,7 +67,8 @@ class GateSwitch:
 
 
 class DecisionGate:
-    """Multiplexes tree and navigation commands into ``driver.send_velocity``."""
+    """Multiplexes the tree's, navigation's and the extra inputs' commands (twist_mux rules, locks)
+    into ``driver.send_velocity``, below the emergency stop and the dead-man."""
 
     def __init__(self, driver: RobotDriver, config: GateConfig | None = None, *,
                  clock: Callable[[], float], backup: DataBackup | None = None,
