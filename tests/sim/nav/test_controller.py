@@ -82,6 +82,24 @@ def test_collision_ahead_raises_no_valid_control():
         rpp.compute(Pose2D(2.0, 3.0, 0.0), Twist(0.25, 0.0), GoalChecker())
 
 
+def test_a_robot_inside_an_inflated_zone_may_drive_out_but_not_deeper():
+    """Beside its own collision mark the robot's cell is inscribed; Nav2's RPP would refuse every
+    command there. Ours lets it follow a path that does not take it deeper, and still refuses
+    one that runs into the mark."""
+    rpp, lc = setup()
+    lc.map.add_obstacle(2.0, 3.12, 0.02)  # a lethal cell 0.1 m from the centre: inscribed
+    lc.recompose()
+    assert lc.in_collision(2.0, 3.0)
+    rpp.set_plan(straight())  # along the mark and away from it
+    cmd = rpp.compute(Pose2D(2.0, 3.0, 0.0), Twist(0.0, 0.0), GoalChecker())
+    assert cmd.linear > 0.0
+    lc.map.add_obstacle(2.3, 3.0, 0.05)  # and now one straight ahead as well
+    lc.recompose()
+    rpp.set_plan(straight())
+    with pytest.raises(NoValidControl):
+        rpp.compute(Pose2D(2.0, 3.0, 0.0), Twist(0.25, 0.0), GoalChecker())
+
+
 def test_goal_checker_is_stateful():
     gc = GoalChecker(0.25, 0.25, stateful=True)
     goal = Pose2D(0.0, 0.0, 0.0)
