@@ -25,18 +25,24 @@ SUCCESS = NodeStatus.SUCCESS
 
 
 def free_distances(scan: LaserScan, half_width: float, radius: float) -> tuple[float, float]:
-    """(ahead, behind): metres from the robot's front/back to the nearest scan point inside the
-    corridor of ``half_width`` on either side of its axis (inf if none)."""
+    """(ahead, behind): how far the circular body (``radius``) can move forward/back before it
+    touches a scan point (inf if none). Points in the side margin (up to ``half_width`` from
+    the axis) count once they lie beyond the body's front/back; one already beside the body
+    does not (the body passes it without touching), so a robot pushed against a wall can still
+    drive along it or away from it."""
     r = np.asarray(scan.ranges, dtype=float)
     angles = scan.angle_min + scan.angle_increment * np.arange(len(r))
     ok = np.isfinite(r)
     x = r[ok] * np.cos(angles[ok])
-    y = r[ok] * np.sin(angles[ok])
-    band = np.abs(y) <= half_width
-    fwd = x[band & (x > 0)]
-    back = x[band & (x < 0)]
-    ahead = float(fwd.min()) - radius if len(fwd) else math.inf
-    behind = float(-back.max()) - radius if len(back) else math.inf
+    y = np.abs(r[ok] * np.sin(angles[ok]))
+    body = y <= radius
+    # travel until the body's circle reaches the point; the margin band from the front/back on
+    reach = np.where(body, np.sqrt(np.maximum(radius * radius - y * y, 0.0)), radius)
+    counted = body | ((y <= half_width) & (np.abs(x) >= radius))
+    fwd = (x - reach)[counted & (x > 0)]
+    back = (-x - reach)[counted & (x < 0)]
+    ahead = float(fwd.min()) if len(fwd) else math.inf
+    behind = float(back.min()) if len(back) else math.inf
     return max(ahead, 0.0), max(behind, 0.0)
 
 

@@ -8,6 +8,7 @@ import asyncio
 import math
 
 import numpy as np
+import pytest
 
 from bt_runtime.runtime.messages import LaserScan, Pose2D, Twist
 from nodes.motion_safety import allowed_speed, free_distances
@@ -115,6 +116,20 @@ def test_free_distance_counts_only_the_swept_corridor():
     ahead, behind = free_distances(scan, half_width=0.2, radius=0.15)
     assert abs(ahead - 0.45) < 1e-9
     assert abs(behind - 0.35) < 1e-9  # the point 0.3 m to the left is beside the path, not in it
+
+
+def test_a_wall_beside_the_body_does_not_stop_it_but_one_ahead_in_the_margin_does():
+    """A robot pushed against a wall (the wall 3 cm from its side, inside the side margin) can
+    still drive along or away from it; the margin still counts for what lies ahead."""
+    wall = {math.atan2(0.23, x): math.hypot(x, 0.23) for x in np.arange(-0.1, 0.1001, 0.01)}
+    ahead, behind = free_distances(_scan(wall, n=3600), half_width=0.25, radius=0.2)
+    assert ahead == math.inf and behind == math.inf
+    ahead, _ = free_distances(_scan({math.atan2(0.23, 0.5): math.hypot(0.5, 0.23)}, n=3600),
+                              half_width=0.25, radius=0.2)
+    assert ahead == pytest.approx(0.3, abs=0.01)  # in the margin, ahead of the front
+    ahead, _ = free_distances(_scan({math.atan2(0.1, 0.5): math.hypot(0.5, 0.1)}, n=3600),
+                              half_width=0.25, radius=0.2)
+    assert ahead == pytest.approx(0.5 - math.sqrt(0.2**2 - 0.1**2), abs=0.01)  # where the circle meets it
 
 
 def test_allowed_speed_stops_short_of_the_obstacle():
