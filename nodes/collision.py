@@ -81,7 +81,10 @@ class CollisionDetected(ConditionNode):
         return [input_port("source", str, "any", "bumper | imu | any"),
                 input_port("imu_threshold", float, 6.0, "m/s^2; well above the base's acceleration limits"),
                 input_port("imu_window", float, 0.25, "s of IMU history to look at"),
-                input_port("imu_spread", float, 0.6, "rad either side of the impact direction"),
+                input_port("imu_spread", float, 0.35, "rad either side of the impact direction (the "
+                                                      "direction, placed with the pose estimate, was "
+                                                      "within 0.23 rad of the true contact in the "
+                                                      "collision variants)"),
                 output_port("direction", float, "{collision_direction}"),
                 output_port("spread", float, "{collision_spread}", "rad either side of direction")]
 
