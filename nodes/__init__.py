@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from bt_runtime import BehaviorTreeFactory
 
-from . import battery, collision, goals, health, motion_safety, path
+from . import battery, collision, goals, health, motion_safety, path, safety_zones
 from .nav2 import register_nav2_nodes
 
 AUTONOMY_NODES = [
@@ -21,7 +21,7 @@ AUTONOMY_NODES = [
     path.RatePathQuality, path.PathReachesGoal, path.PlannerAnswers,
     path.FindAlternativeGoal, path.EscapeInflation,
     goals.GoalPending, goals.SetGoalStatus, goals.RetryGoal,
-    motion_safety.StopBeforeObstacle,
+    motion_safety.StopBeforeObstacle, safety_zones.SafetyZoneTriggered,
 ]
 
 

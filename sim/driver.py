@@ -127,7 +127,8 @@ class SimDriver:
                          voltage_nominal=(battery.voltage_full + battery.voltage_empty) / 2,
                          idle_power_w=battery.idle_power_w, k_linear=battery.k_linear,
                          k_angular=battery.k_angular,
-                         bumper_segments=profile.bumper.spans() if profile.bumper is not None else ())
+                         bumper_segments=profile.bumper.spans() if profile.bumper is not None else (),
+                         lidar_x=profile.lidar.x, lidar_y=profile.lidar.y)
 
     async def restart(self, name: str) -> bool:
         if name in self._nav_names:

@@ -37,6 +37,7 @@ from .driver import RobotDriver
 from .gate import DecisionGate
 from .goal_intake import GoalHandle, GoalIntake
 from .messages import RobotInfo
+from .safety_zones import build_safety_zones
 from .shutdown import register_live, settle, unregister_live
 from .supervisor import SystemSupervisor
 from .tick_loop import TickLoop
@@ -91,6 +92,9 @@ class AutonomyRuntime:
         self.backup = DataBackup(driver, cfg.backup, clock=clock)
         self.gate = DecisionGate(driver, cfg.gate, clock=clock, backup=self.backup,
                                  limits=MotionLimits.from_robot(robot))
+        self.safety_zones = build_safety_zones(cfg.safety_zones, robot, driver, passthrough=cfg.gate.passthrough,
+                                               clock=clock, backup=self.backup)
+        self.gate.zones = self.safety_zones
         self.supervisor = SystemSupervisor(driver, cfg.supervisor, clock=clock, gate=self.gate)
         self.backup.supervisor = self.supervisor
         self.context = RuntimeContext(driver, self.supervisor, self.backup, self.gate, cfg, clock, robot=robot)
@@ -182,6 +186,8 @@ class AutonomyRuntime:
             serve_goals(self.goals)
         self.backup.attach()
         self.gate.attach()
+        if self.safety_zones is not None:
+            self.safety_zones.attach(self.driver)
         self.supervisor.attach()
         self.supervisor.register_local("tree", timeout=max(0.5, 5.0 / self.config.tick.rate_hz),
                                        restart=self._restart_tree, auto_restart=True)
@@ -287,6 +293,8 @@ class AutonomyRuntime:
             self.watchdog.stop()
         self.supervisor.detach()
         self.gate.detach()
+        if self.safety_zones is not None:
+            self.safety_zones.detach()
         self.backup.detach()
         try:
             await asyncio.wait_for(self.driver.stop(), timeout)

@@ -153,10 +153,18 @@ class GateConfig(_Model):
         return config
 
 
+class SafetyZonesSettings(_Model):
+    enabled: bool = Field(True, description="collision_monitor-style zones on the lidar scan, applied by the "
+                                            "gate to every command (never in passthrough mode)")
+    file: str | None = Field(None, description="a collision_monitor parameter file (YAML); none: zones sized "
+                                               "for the robot (docs/safety_zones.md)")
+
+
 class RuntimeConfig(_Model):
     tick: TickConfig = Field(default_factory=TickConfig)
     supervisor: SupervisorConfig = Field(default_factory=SupervisorConfig)
     backup: BackupConfig = Field(default_factory=BackupConfig)
     gate: GateConfig = Field(default_factory=GateConfig)
+    safety_zones: SafetyZonesSettings = Field(default_factory=SafetyZonesSettings)
     shutdown_timeout: float = Field(2.0, gt=0, description="at stop, tasks that ignore cancellation (and a "
                                                            "driver that does not stop) are abandoned after this")

@@ -37,6 +37,7 @@ from .twist_mux import INPUT_STREAM, LOCK_STREAM, TwistMux
 if TYPE_CHECKING:
     from .backup import DataBackup
     from .driver import RobotDriver
+    from .safety_zones import SafetyZones
     from .watchdog import LoopWatchdog
 
 log = structlog.get_logger("bt_runtime.gate")
@@ -98,6 +99,7 @@ class DecisionGate:
         self.refused: dict[str, RefusedCommands] = {}
         self.watchdog: LoopWatchdog | None = None
         self.mux = TwistMux(self.config.inputs, self.config.locks)
+        self.zones: SafetyZones | None = None  # collision_monitor-style zones (safety_zones.py)
 
     # -- setup ---------------------------------------------------------------------------------
     def attach(self) -> None:
@@ -365,6 +367,9 @@ class DecisionGate:
         if not is_finite(twist):  # every input is checked already; this is the last line
             self._refuse_if_nonfinite(source, twist.linear, twist.angular)
             twist = ZERO_TWIST
+        zones = self.zones
+        if zones is not None and not self.config.passthrough:  # every source, before the final clamp
+            twist = zones.filter(twist, now, source)
         twist = self.limiter.apply(twist, self.last_output, now - self._last_output_time, self.speed_limit)
         if source != self.source:
             self.switches.append(GateSwitch(now, source, self.source, reason))

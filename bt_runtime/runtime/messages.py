@@ -282,6 +282,11 @@ class RobotInfo:
     # bumper segments as (start, width) in radians, robot frame, counter-clockwise from ahead;
     # empty: the robot has no bumper (collisions are sensed by the IMU alone)
     bumper_segments: tuple[tuple[float, float], ...] = ()
+    # the lidar's mount in the base frame (m, m, rad): scans are in its frame (the safety zones
+    # turn them into the base frame with it)
+    lidar_x: float = 0.0
+    lidar_y: float = 0.0
+    lidar_yaw: float = 0.0
 
     def power(self, linear: float, angular: float = 0.0) -> float:
         return self.idle_power_w + self.k_linear * abs(linear) + self.k_angular * abs(angular)

@@ -153,6 +153,9 @@ class RobotConfig(_Model):
     idle_power_w: float = Field(6.0, ge=0)
     k_linear: float = Field(12.0, ge=0, description="W per m/s")
     k_angular: float = Field(1.0, ge=0, description="W per rad/s")
+    lidar_x: float = Field(-0.032, description="m: the scan frame's origin in the base frame (safety zones)")
+    lidar_y: float = Field(0.0, description="m")
+    lidar_yaw: float = Field(0.0, description="rad: the scan frame's yaw in the base frame")
 
 
 class BringupConfig(_Model):
