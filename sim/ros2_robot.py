@@ -96,8 +96,10 @@ class SimRobot:
                  namespace: str = "", crashes: list[tuple[str, float]] | tuple = (), cruise_speed: float | None = None,
                  stamped_cmd_vel: bool = False, cyclonedds_uri: str | None = None,
                  goal_tolerance: float | None = None, nav_autostart: bool = False,
-                 refuse_activate: tuple[str, ...] | list[str] = ()):
+                 refuse_activate: tuple[str, ...] | list[str] = (),
+                 spawn: tuple[float, float, float] | None = None):
         self.world, self.robot, self.seed = world, robot, seed
+        self.spawn = spawn  # None: the world's spawn pose
         self.domain_id = domain_id
         self.namespace = namespace
         self.crashes = list(crashes)
@@ -126,8 +128,9 @@ class SimRobot:
         self._ros_offset = time.time() - asyncio.get_running_loop().time()
         nav_params = ({"controller": {"xy_goal_tolerance": self.goal_tolerance}}
                       if self.goal_tolerance is not None else None)
+        extra = {"spawn": self.spawn} if self.spawn is not None else {}
         self.driver = driver = SimDriver(self.world, self.robot, seed=self.seed, cruise_speed=self.cruise_speed,
-                                         nav_params=nav_params)
+                                         nav_params=nav_params, **extra)
         sim = driver.sim
         self.node = node = dds.DdsNode(self.domain_id, namespace=self.namespace, cyclonedds_uri=self.cyclonedds_uri)
         pub = node.publisher

@@ -63,6 +63,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--loopback", action="store_true",
                    help="--driver ros2: DDS on 127.0.0.1 only, to reach a `sim-robot --loopback` on this machine")
     add_registration_arguments(p)
+    p.add_argument("--collision-monitor", default=None, metavar="FILE|off",
+                   help="safety zones from a Nav2 collision_monitor parameter file; 'off': none (default: "
+                        "zones sized for the robot, docs/safety_zones.md)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="set a root blackboard entry before the first tick (repeatable)")
     p.add_argument("--log-json", action="store_true", help="structlog events as JSON lines on stdout")
@@ -143,6 +146,23 @@ def load_config(path: Path | None, twist_mux: Path | None = None):
                 raise UsageError(f"--twist-mux: {exc}") from None
             raise UsageError(f"--twist-mux {twist_mux}: "
                              + "; ".join(p.removeprefix("'(top level)': ") for p in plain_errors(exc))) from None
+    return config
+
+
+def with_collision_monitor(config, choice: str | None):
+    """``config`` with ``--collision-monitor`` applied; the zones file is read now, so a bad one
+    is a usage error naming the file and field rather than a failure at start."""
+    from ..runtime.safety_zones_config import SafetyZonesConfigError, load_collision_monitor
+
+    if choice is not None:
+        update = {"enabled": False} if choice == "off" else {"enabled": True, "file": choice}
+        config = config.model_copy(update={"safety_zones": config.safety_zones.model_copy(update=update)})
+    zones = config.safety_zones
+    if zones.enabled and zones.file is not None:
+        try:
+            load_collision_monitor(zones.file)
+        except SafetyZonesConfigError as exc:
+            raise UsageError(str(exc)) from None
     return config
 
 
@@ -311,7 +331,8 @@ def run(args: argparse.Namespace) -> int:
             log_file = configure_logging(file=args.log_file, level=args.log_level)
         else:
             configure_logging(json=False, stream=console or sys.stderr, level="warning")
-        config = load_config(args.config, getattr(args, "twist_mux", None))
+        config = with_collision_monitor(load_config(args.config, getattr(args, "twist_mux", None)),
+                                        args.collision_monitor)
         try:
             registrations = node_registrations(args)
         except RegistrationError as exc:

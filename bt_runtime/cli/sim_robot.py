@@ -23,6 +23,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--domain", type=int, default=None, metavar="N",
                    help="DDS domain id (default: $ROS_DOMAIN_ID or 0)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--spawn", default=None, metavar="X,Y[,YAW]", help="start pose (default: the world's spawn)")
     p.add_argument("--namespace", default="", help="ROS namespace for every name")
     p.add_argument("--realtime", action="store_true",
                    help="accepted for symmetry with run: a DDS peer always runs on the wall clock")
@@ -51,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
     import os
 
     from ..logging_setup import configure_logging
+    from ..runtime.messages import Pose2D
 
     try:
         from bt_runtime.runtime.ros2 import dds
@@ -69,6 +71,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"error: --refuse-activate: no lifecycle node {', '.join(unknown)} (nodes: {', '.join(known)})",
               file=sys.stderr)
         return EXIT_USAGE
+    spawn = None
+    if args.spawn is not None:
+        try:
+            pose = Pose2D.from_string(args.spawn)
+        except ValueError as exc:
+            print(f"error: --spawn: {exc}", file=sys.stderr)
+            return EXIT_USAGE
+        spawn = (pose.x, pose.y, pose.yaw)
     domain = args.domain
     if domain is None:
         env = os.environ.get("ROS_DOMAIN_ID", "")
@@ -81,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     robot = SimRobot(args.world, args.robot, seed=args.seed, domain_id=domain, namespace=args.namespace,
                      crashes=crashes, cruise_speed=args.cruise_speed, stamped_cmd_vel=args.stamped_cmd_vel,
                      cyclonedds_uri=uri, goal_tolerance=args.goal_tolerance, nav_autostart=args.nav_autostart,
-                     refuse_activate=args.refuse_activate)
+                     refuse_activate=args.refuse_activate, spawn=spawn)
     try:
         asyncio.run(run_sim_robot(robot, args.duration))
     except (FileNotFoundError, KeyError) as exc:
