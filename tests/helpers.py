@@ -65,3 +65,33 @@ async def wait_until(predicate, timeout: float, what: str) -> None:
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out waiting for {what}")
         await asyncio.sleep(0.02)
+
+
+# --- a tree that ignores obstacles (the safety-zone tests: the gate's zones must stop it) -----
+
+BLIND_TREE = tree_xml("""
+  <Parallel success_count="-1" failure_count="1">
+    <KeepRunningUntilFailure><DriveBlindly speed="0.22"/></KeepRunningUntilFailure>
+    <KeepRunningUntilFailure><ForceSuccess>
+      <SafetyZoneTriggered action="stop" triggered_zone="{zone}" triggered_action="{action}"/>
+    </ForceSuccess></KeepRunningUntilFailure>
+  </Parallel>""")
+
+
+def register_blind_driving(factory) -> None:
+    """The node library plus ``DriveBlindly`` (straight ahead every tick, whatever is there)."""
+    import nodes
+    from bt_runtime import NodeStatus, SyncActionNode
+    from bt_runtime.ports import input_port
+
+    class DriveBlindly(SyncActionNode):
+        @classmethod
+        def provided_ports(cls):
+            return [input_port("speed", float, 0.2)]
+
+        def tick(self):
+            self.context.gate.set_tree_command(self.get_input("speed"), 0.0)
+            return NodeStatus.SUCCESS
+
+    nodes.register_all(factory)
+    factory.register_node_type(DriveBlindly)

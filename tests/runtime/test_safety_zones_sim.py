@@ -7,23 +7,11 @@ from __future__ import annotations
 import asyncio
 import math
 
-from bt_runtime import NodeStatus, SyncActionNode
-from bt_runtime.ports import input_port
 from bt_runtime.runtime.config import RuntimeConfig, SafetyZonesSettings
 from bt_runtime.runtime.safety_zones import STREAM
+from tests.helpers import BLIND_TREE, register_blind_driving
 
 SPAWN = (-2.0, -2.0, math.pi / 2)  # the apartment: a wall 1.75 m ahead
-
-TREE = """
-<root BTCPP_format="4"><BehaviorTree ID="Main">
-  <Parallel success_count="-1" failure_count="1">
-    <KeepRunningUntilFailure><DriveBlindly speed="0.22"/></KeepRunningUntilFailure>
-    <KeepRunningUntilFailure><ForceSuccess>
-      <SafetyZoneTriggered action="stop" triggered_zone="{zone}" triggered_action="{action}"/>
-    </ForceSuccess></KeepRunningUntilFailure>
-  </Parallel>
-</BehaviorTree></root>
-"""
 
 STOP_ONLY = """\
 collision_monitor:
@@ -40,25 +28,6 @@ collision_monitor:
 """
 
 
-class DriveBlindly(SyncActionNode):
-    """Commands straight ahead every tick, whatever is there (the tree the zones must stop)."""
-
-    @classmethod
-    def provided_ports(cls):
-        return [input_port("speed", float, 0.2)]
-
-    def tick(self):
-        self.context.gate.set_tree_command(self.get_input("speed"), 0.0)
-        return NodeStatus.SUCCESS
-
-
-def register(factory):
-    import nodes
-
-    nodes.register_all(factory)
-    factory.register_node_type(DriveBlindly)
-
-
 def clearance(rt) -> float:
     """Ground truth: metres between the robot's body and the nearest wall."""
     sim = rt.driver.sim
@@ -66,7 +35,8 @@ def clearance(rt) -> float:
 
 
 async def drive(runtime, settings: SafetyZonesSettings, seconds=14.0):
-    rt = await runtime(TREE, register=[register], config=RuntimeConfig(safety_zones=settings), spawn=SPAWN)
+    rt = await runtime(BLIND_TREE, register=[register_blind_driving],
+                       config=RuntimeConfig(safety_zones=settings), spawn=SPAWN)
     try:
         await asyncio.sleep(seconds)  # 1.75 m at 0.22 m/s: the wall is reached after ~7 s
         return rt, clearance(rt), rt.tree.root_blackboard

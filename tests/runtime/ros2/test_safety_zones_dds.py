@@ -1,0 +1,77 @@
+"""Safety zones on a ROS 2 robot over DDS: ``sim-robot`` faces a wall, the runtime (Ros2Driver,
+wall clock) runs a tree that drives straight at it; the gate's stop zone, fed by the scan that
+came over DDS, halts the robot short of the wall. The simulator's ground truth (its
+``sim/ground_truth`` topic) is read by the test only."""
+
+import asyncio
+import math
+import os
+
+import pytest
+
+pytest.importorskip("cyclonedds")
+
+from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
+from bt_runtime.runtime.config import RuntimeConfig, SafetyZonesSettings  # noqa: E402
+from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
+from bt_runtime.runtime.safety_zones import STREAM  # noqa: E402
+from sim.world import load_world  # noqa: E402
+from tests.helpers import BLIND_TREE, SimRobotProcess, register_blind_driving  # noqa: E402
+from tests.helpers import wait_until as wait_for  # noqa: E402
+
+STOP_ZONE = """\
+collision_monitor:
+  ros__parameters:
+    source_timeout: 1.0
+    polygons: ["PolygonStop"]
+    PolygonStop:
+      type: "polygon"
+      points: "[[0.3, 0.12], [0.3, -0.12], [0.0, -0.12], [0.0, 0.12]]"
+      action_type: "stop"
+      min_points: 4
+    observation_sources: ["scan"]
+    scan: {type: "scan", topic: "/scan"}
+"""
+BURGER_RADIUS = 0.105
+
+
+@pytest.fixture(autouse=True)
+def loopback(monkeypatch):
+    monkeypatch.setenv("CYCLONEDDS_URI", dds.loopback_config())
+
+
+async def test_a_stop_zone_halts_a_blind_tree_before_the_wall_over_dds(tmp_path):
+    domain = 100 + (os.getpid() + 7 * 37) % 100  # a domain of its own (the e2e tests use 100..199 too)
+    zones_file = tmp_path / "cm.yaml"
+    zones_file.write_text(STOP_ZONE)
+    robot = SimRobotProcess(domain, "--robot", "burger", "--spawn=-2,-2,1.5708", duration=60.0)
+    try:
+        await robot.ready()
+        driver = Ros2Driver(Ros2Config(domain_id=domain))  # the burger, lidar 0.032 m behind the centre
+        config = RuntimeConfig(safety_zones=SafetyZonesSettings(file=str(zones_file)))
+        runtime = AutonomyRuntime(driver, config, realtime=True, register=[register_blind_driving])
+        runtime.load_tree(BLIND_TREE)
+        truth: list[tuple[float, float]] = []
+        await runtime.start()
+        try:
+            driver.node.subscription("sim/ground_truth", idl.PoseStamped, dds.DEFAULT,
+                                     lambda s, now: truth.extend((m.pose.position.x, m.pose.position.y) for m in s))
+            await wait_for(lambda: truth and truth[-1][1] > -1.9, 20, "the robot to drive 0.1 m")
+            # 1.75 m at 0.22 m/s: 8 s to the wall; the zone must have stopped it by then
+            await wait_for(lambda: runtime.safety_zones.state.zone == "PolygonStop", 30, "the stop zone")
+            stopped_at = truth[-1]
+            await asyncio.sleep(2.0)  # it stays stopped while the tree keeps commanding
+            bb = runtime.tree.root_blackboard
+            read = (bb.get("zone", default=""), bb.get("action", default=""))
+            states = [m for _, m in runtime.backup.buffer(STREAM)]
+        finally:
+            await runtime.stop()
+    finally:
+        robot.stop()
+    world = load_world("apartment")
+    x, y = truth[-1]
+    gap = world.clearance(x, y) - BURGER_RADIUS
+    assert gap > 0.01, f"the robot ended {gap:.3f} m from the wall (ground truth)"
+    assert math.hypot(x - stopped_at[0], y - stopped_at[1]) < 0.05  # and did not creep on
+    assert read == ("PolygonStop", "stop")  # the tree read the zone
+    assert states and states[0].action == "stop" and states[0].source == "tree"
