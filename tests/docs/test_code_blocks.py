@@ -108,7 +108,11 @@ def _check_yaml(block: Block) -> None:
         from bt_runtime.runtime.ros2 import Ros2Config
 
         Ros2Config.model_validate(data)
-    elif isinstance(data, dict) and set(data) <= {"tick", "supervisor", "backup", "gate"}:
+    elif isinstance(data, dict) and set(data) == {"collision_monitor"}:  # docs/safety_zones.md
+        from bt_runtime.runtime.safety_zones_config import from_parameters
+
+        from_parameters(data["collision_monitor"]["ros__parameters"], block.id)
+    elif isinstance(data, dict) and set(data) <= {"tick", "supervisor", "backup", "gate", "safety_zones"}:
         from bt_runtime.runtime.config import RuntimeConfig
 
         RuntimeConfig.model_validate(data)
