@@ -97,7 +97,7 @@ class SimRobot:
                  stamped_cmd_vel: bool = False, cyclonedds_uri: str | None = None,
                  goal_tolerance: float | None = None, nav_autostart: bool = False,
                  refuse_activate: tuple[str, ...] | list[str] = (),
-                 spawn: tuple[float, float, float] | None = None):
+                 spawn: tuple[float, float, float] | None = None, service_mapping: str = "cyclonedds"):
         self.world, self.robot, self.seed = world, robot, seed
         self.spawn = spawn  # None: the world's spawn pose
         self.domain_id = domain_id
@@ -109,6 +109,7 @@ class SimRobot:
         self.goal_tolerance = goal_tolerance
         self.nav_autostart = nav_autostart  # the stand-in's servers start active (else unconfigured)
         self.refuse_activate = tuple(refuse_activate)  # lifecycle nodes whose on_activate fails
+        self.service_mapping = service_mapping  # request ids as rmw_cyclonedds (default) or DDS-RPC basic
         self.lifecycle_nodes: dict[str, EmulatedLifecycleNode] = {}
         self.driver: SimDriver | None = None
         self.node: dds.DdsNode | None = None
@@ -132,7 +133,8 @@ class SimRobot:
         self.driver = driver = SimDriver(self.world, self.robot, seed=self.seed, cruise_speed=self.cruise_speed,
                                          nav_params=nav_params, **extra)
         sim = driver.sim
-        self.node = node = dds.DdsNode(self.domain_id, namespace=self.namespace, cyclonedds_uri=self.cyclonedds_uri)
+        self.node = node = dds.DdsNode(self.domain_id, namespace=self.namespace, cyclonedds_uri=self.cyclonedds_uri,
+                                       service_mapping=self.service_mapping)
         pub = node.publisher
         writers = {
             "scan": pub("scan", idl.LaserScan, dds.SENSOR_DATA),

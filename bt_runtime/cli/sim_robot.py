@@ -39,6 +39,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                         "autostart); by default they start unconfigured and wait to be configured and activated")
     p.add_argument("--refuse-activate", action="append", default=[], metavar="NODE",
                    help="this lifecycle node's activation fails (it stays inactive; repeatable; for tests)")
+    p.add_argument("--service-mapping", default="cyclonedds", choices=["cyclonedds", "rpc_basic"],
+                   help="request ids of services/actions as rmw_cyclonedds_cpp (default) or DDS-RPC basic "
+                        "(rmw_connextdds with RMW_CONNEXT_REQUEST_REPLY_MAPPING=basic); see docs/ros2.md")
     p.add_argument("--stamped-cmd-vel", action="store_true", help="cmd_vel is TwistStamped (Jazzy option)")
     p.add_argument("--loopback", action="store_true", help="DDS on 127.0.0.1 only (unless CYCLONEDDS_URI is set)")
     p.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds")
@@ -91,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     robot = SimRobot(args.world, args.robot, seed=args.seed, domain_id=domain, namespace=args.namespace,
                      crashes=crashes, cruise_speed=args.cruise_speed, stamped_cmd_vel=args.stamped_cmd_vel,
                      cyclonedds_uri=uri, goal_tolerance=args.goal_tolerance, nav_autostart=args.nav_autostart,
-                     refuse_activate=args.refuse_activate, spawn=spawn)
+                     refuse_activate=args.refuse_activate, spawn=spawn, service_mapping=args.service_mapping)
     try:
         asyncio.run(run_sim_robot(robot, args.duration))
     except (FileNotFoundError, KeyError) as exc:

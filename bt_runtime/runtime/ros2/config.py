@@ -187,6 +187,11 @@ class Ros2Config(_Model):
     cyclonedds_uri: str | None = Field(None, description="Cyclone DDS XML or file:// URI; default: "
                                        "the CYCLONEDDS_URI environment variable")
     loopback_only: bool = Field(False, description="use 127.0.0.1 only (a robot on this machine)")
+    service_mapping: Literal["cyclonedds", "rpc_basic"] = Field(
+        "cyclonedds", description="where services and actions carry the request id: rmw_cyclonedds_cpp's "
+        "payload header (also rmw_connextdds with RMW_CONNEXT_CYCLONE_COMPATIBILITY_MODE), or DDS-RPC's basic "
+        "mapping (rmw_connextdds with RMW_CONNEXT_REQUEST_REPLY_MAPPING=basic, rmw_connextddsmicro); "
+        "rmw_fastrtps_cpp cannot be reached (docs/ros2.md, 'Which middleware')")
     topics: Topics = Field(default_factory=Topics)
     navigation: Navigation = Field(default_factory=Navigation)
     goals: GoalServing = Field(default_factory=GoalServing)

@@ -108,12 +108,15 @@ class DdsNode:
     _ids = itertools.count(1)
 
     def __init__(self, domain_id: int = 0, *, loop: asyncio.AbstractEventLoop | None = None,
-                 namespace: str = "", cyclonedds_uri: str | None = None):
+                 namespace: str = "", cyclonedds_uri: str | None = None, service_mapping: str = "cyclonedds"):
         if cyclonedds_uri:
             os.environ["CYCLONEDDS_URI"] = cyclonedds_uri  # read when the domain is first created
         self.loop = loop or asyncio.get_running_loop()
         self.domain_id = domain_id
         self.namespace = namespace
+        if service_mapping not in idl.SERVICE_MAPPINGS:
+            raise ValueError(f"service_mapping must be one of {idl.SERVICE_MAPPINGS}, got {service_mapping!r}")
+        self.service_mapping = service_mapping  # where services carry the request id (idl.service_wire)
         self.participant = DomainParticipant(domain_id)
         self._topics: dict[str, Topic] = {}
         self._readers: list[Reader] = []
@@ -251,13 +254,17 @@ class ServiceClient:
                  qos: QosProfile = SERVICES):
         self.node = node
         self.name = node.fq(name)
-        self.request_wire = idl.service_wire(request_type)
+        self.mapping = mapping = node.service_mapping
+        self.request_wire = idl.service_wire(request_type, mapping, "request")
         self.response_type = response_type
         user_data = f"clientid={node.unique_id()};"
         self.writer = node.writer(f"rq{self.name}Request", self.request_wire, qos, user_data=user_data)
-        self.reader = node.reader(f"rr{self.name}Reply", idl.service_wire(response_type), qos,
+        self.reader = node.reader(f"rr{self.name}Reply", idl.service_wire(response_type, mapping, "reply"), qos,
                                   self._on_replies, user_data=user_data)
-        self.guid = self.writer.get_instance_handle() & 0xFFFF_FFFF_FFFF_FFFF  # uint64 on the wire
+        # the request id's writer part: rmw_cyclonedds uses the request writer's instance handle
+        # (uint64); DDS-RPC's basic mapping the request writer's GUID (16 bytes)
+        self.guid = (self.writer.get_instance_handle() & 0xFFFF_FFFF_FFFF_FFFF if mapping == "cyclonedds"
+                     else self.writer.get_guid().bytes)
         self._seq = itertools.count(1)
         self._pending: dict[int, asyncio.Future] = {}
 
@@ -278,11 +285,16 @@ class ServiceClient:
 
     def _on_replies(self, samples: list, _now: float) -> None:
         for sample in samples:
-            if sample.guid != self.guid:
+            guid, seq = idl.request_id(sample)
+            if guid != self.guid:
                 continue  # another client's reply
-            fut = self._pending.pop(sample.seq, None)
+            fut = self._pending.pop(seq, None)
             if fut is not None and not fut.done():
                 fut.set_result(idl.unwrap(sample))
+
+    def write_request(self, seq: int, request: Any) -> None:
+        """Send ``request`` (the body type) with request id (our guid, ``seq``)."""
+        self.writer.write(idl.wrap(self.guid, seq, request, self.mapping, "request"))
 
     async def call(self, request: Any, timeout: float = 2.0) -> Any:
         """Send ``request`` (the body type) and return the response body; ServiceError on
@@ -295,7 +307,7 @@ class ServiceClient:
         fut = loop.create_future()
         self._pending[seq] = fut
         try:
-            self.writer.write(idl.wrap(self.guid, seq, request))
+            self.write_request(seq, request)
             return await asyncio.wait_for(fut, max(0.0, deadline - loop.time()))
         except TimeoutError:
             raise ServiceError(f"service {self.name}: no reply within {timeout} s") from None
@@ -312,10 +324,11 @@ class ServiceServer:
         self.node = node
         self.name = node.fq(name)
         self.handler = handler
-        self.response_wire = idl.service_wire(response_type)
+        self.mapping = mapping = node.service_mapping
+        self.response_wire = idl.service_wire(response_type, mapping, "reply")
         user_data = f"serviceid={node.unique_id()};"
         self.writer = node.writer(f"rr{self.name}Reply", self.response_wire, qos, user_data=user_data)
-        self.reader = node.reader(f"rq{self.name}Request", idl.service_wire(request_type), qos,
+        self.reader = node.reader(f"rq{self.name}Request", idl.service_wire(request_type, mapping, "request"), qos,
                                   self._on_requests, user_data=user_data)
         self._tasks: set[asyncio.Task] = set()
         self.served = 0
@@ -336,7 +349,8 @@ class ServiceServer:
             return
         if self.node.closed or response is None:  # None: no reply (a hung server)
             return
-        self.writer.write(idl.wrap(sample.guid, sample.seq, response))
+        guid, seq = idl.request_id(sample)  # echoed: the client matches its reply by it
+        self.writer.write(idl.wrap(guid, seq, response, self.mapping, "reply"))
         self.served += 1
 
     def close(self) -> None:
@@ -429,7 +443,7 @@ class ActionClient:
         client._pending[seq] = fut
         absent_since: float | None = None
         try:
-            client.writer.write(idl.wrap(client.guid, seq, self.types.GetResult_Request(goal_id=idl.UUID(uuid=goal_id))))
+            client.write_request(seq, self.types.GetResult_Request(goal_id=idl.UUID(uuid=goal_id)))
             while True:
                 done, _ = await asyncio.wait({fut}, timeout=poll)
                 if done:

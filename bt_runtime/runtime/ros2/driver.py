@@ -95,7 +95,8 @@ class Ros2Driver:
         self.loop = asyncio.get_running_loop()
         uri = cfg.cyclonedds_uri or (dds.loopback_config() if cfg.loopback_only and
                                      not os.environ.get("CYCLONEDDS_URI") else None)
-        self.node = node = dds.DdsNode(cfg.domain_id, loop=self.loop, namespace=cfg.namespace, cyclonedds_uri=uri)
+        self.node = node = dds.DdsNode(cfg.domain_id, loop=self.loop, namespace=cfg.namespace, cyclonedds_uri=uri,
+                                       service_mapping=cfg.service_mapping)
         t = cfg.topics
         conv = self.conv
         specs: list[tuple[str, Any, type, Callable]] = [

@@ -8,8 +8,8 @@ serializer produces the same bytes as ROS 2 (checked against ``rosbags`` in
 ``structure_needs_at_least_one_member`` byte.
 
 Services over rmw_cyclonedds put a 16-byte header (``uint64 guid`` of the client's request
-writer, ``int64 seq``) before the request or reply fields: ``service_wire`` builds those
-wire types. Actions are three such services (``send_goal``, ``get_result``, ``cancel_goal``)
+writer, ``int64 seq``) before the request or reply fields (DDS-RPC's basic mapping, which
+rmw_connextdds can use, a longer one): ``service_wire`` builds those wire types. Actions are three such services (``send_goal``, ``get_result``, ``cancel_goal``)
 plus the ``feedback`` and ``status`` topics (rcl_action); ``ActionTypes`` bundles the types of
 one action.
 
@@ -46,7 +46,7 @@ __all__ = [
     "LaserScan", "MapMetaData", "NavigateToPose", "OccupancyGrid", "String", "Odometry", "Path", "Point", "Pose", "PoseStamped",
     "PoseWithCovariance", "PoseWithCovarianceStamped", "Quaternion", "Spin", "SpeedLimit", "State", "Time",
     "Transition", "Twist", "TwistStamped", "TwistWithCovariance", "UUID", "Vector3",
-    "Vector3Stamped", "Wait", "service_wire", "unwrap", "wrap",
+    "Vector3Stamped", "Wait", "request_id", "service_wire", "unwrap", "wrap",
 ]
 
 
@@ -500,35 +500,71 @@ Wait = ActionTypes("nav2_msgs", "Wait", goal=[("time", Duration, _of(Duration))]
 ACTIONS = {a.name: a for a in (NavigateToPose, ComputePathToPose, FollowPath, Spin, BackUp,
                                 DriveOnHeading, Wait)}
 
-_WIRE_CACHE: dict[type, type] = {}
+_WIRE_CACHE: dict[tuple, type] = {}
+
+# How the request id travels in the payload, per ROS 2 middleware (see docs/ros2.md, "Which
+# middleware"): rmw_cyclonedds puts {uint64 guid, int64 seq} before the fields; DDS-RPC's
+# *basic* mapping (rmw_connextdds with RMW_CONNEXT_REQUEST_REPLY_MAPPING=basic,
+# rmw_connextddsmicro) puts a RequestHeader {SampleIdentity requestId; string instanceName}
+# before a request and a ReplyHeader {SampleIdentity relatedRequestId; int32 remoteEx} before
+# a reply, SampleIdentity being {octet guid[16]; int32 sn_high; uint32 sn_low}.
+SERVICE_MAPPINGS = ("cyclonedds", "rpc_basic")
+_HEADERS = {
+    ("cyclonedds", "request"): [("guid", uint64, 0), ("seq", int64, 0)],
+    ("cyclonedds", "reply"): [("guid", uint64, 0), ("seq", int64, 0)],
+    ("rpc_basic", "request"): [("rpc_guid", array[uint8, 16], _zeros(16)), ("rpc_sn_high", int32, 0),
+                               ("rpc_sn_low", uint32, 0), ("rpc_instance_name", str, "")],
+    ("rpc_basic", "reply"): [("rpc_guid", array[uint8, 16], _zeros(16)), ("rpc_sn_high", int32, 0),
+                             ("rpc_sn_low", uint32, 0), ("rpc_remote_ex", int32, 0)],
+}
 
 
-def service_wire(body: type) -> type:
-    """The type rmw_cyclonedds puts on an ``rq/...Request`` or ``rr/...Reply`` topic: the
-    request header (``guid``: the client's request-writer instance handle, ``seq``) followed by
-    the request or response fields, flattened (the same bytes as nesting the body in CDR, and
-    the type may not contain a member of its own DDS type name). ``wrap``/``unwrap`` convert."""
-    wire = _WIRE_CACHE.get(body)
+def service_wire(body: type, mapping: str = "cyclonedds", role: str = "request") -> type:
+    """The type a service puts on an ``rq/...Request`` or ``rr/...Reply`` topic: the request
+    header of ``mapping`` (rmw_cyclonedds's by default) followed by the request or response
+    fields, flattened (the same bytes as nesting the body in CDR, and the type may not contain
+    a member of its own DDS type name). ``role``: "request" or "reply" (rpc_basic's headers
+    differ). ``wrap``/``unwrap``/``request_id`` convert."""
+    key = (body, mapping, role)
+    wire = _WIRE_CACHE.get(key)
     if wire is None:
         from dataclasses import MISSING, fields
 
-        members = [("guid", uint64, 0), ("seq", int64, 0)]
+        try:
+            members = list(_HEADERS[mapping, role])
+        except KeyError:
+            raise ValueError(f"service mapping {mapping!r} / role {role!r}: expected one of "
+                             f"{SERVICE_MAPPINGS} and request/reply") from None
         hints = get_extended_type_hints(body)
         for f in fields(body):
             default = (field(default_factory=f.default_factory) if f.default_factory is not MISSING
                        else f.default)
             members.append((f.name, hints[f.name], default))
-        wire = _struct(f"{body.__name__}_Wire", body.__idl_typename__, members)
+        suffix = "" if mapping == "cyclonedds" else f"_{mapping}_{role}"
+        wire = _struct(f"{body.__name__}_Wire{suffix}", body.__idl_typename__, members)
         wire.body_type = body
         wire.body_fields = tuple(f.name for f in fields(body))
-        _WIRE_CACHE[body] = wire
+        wire.mapping = mapping
+        _WIRE_CACHE[key] = wire
     return wire
 
 
-def wrap(guid: int, seq: int, body: Any) -> Any:
-    """The wire sample for a request/reply body."""
-    wire = service_wire(type(body))
-    return wire(guid=guid, seq=seq, **{name: getattr(body, name) for name in wire.body_fields})
+def wrap(guid: Any, seq: int, body: Any, mapping: str = "cyclonedds", role: str = "request") -> Any:
+    """The wire sample for a request/reply body with request id (``guid``, ``seq``): ``guid`` is
+    a uint64 for rmw_cyclonedds's mapping, the 16 GUID bytes for rpc_basic."""
+    wire = service_wire(type(body), mapping, role)
+    fields_ = {name: getattr(body, name) for name in wire.body_fields}
+    if mapping == "cyclonedds":
+        return wire(guid=guid, seq=seq, **fields_)
+    return wire(rpc_guid=list(bytes(guid)), rpc_sn_high=seq >> 32,
+                rpc_sn_low=seq & 0xFFFF_FFFF, **fields_)
+
+
+def request_id(sample: Any) -> tuple[Any, int]:
+    """(guid, seq) of a wire sample, in the form ``wrap`` takes."""
+    if type(sample).mapping == "cyclonedds":
+        return sample.guid, sample.seq
+    return bytes(sample.rpc_guid), (sample.rpc_sn_high << 32) | sample.rpc_sn_low
 
 
 def unwrap(sample: Any) -> Any:

@@ -27,6 +27,7 @@ from tests.paths import ROOT  # noqa: E402
 
 MAP_YAML = ROOT / "sim" / "worlds" / "maps" / "apartment_map.yaml"
 NAV = ("controller_server", "planner_server", "behavior_server")
+NS = f"bringup_{os.getpid()}"  # our own names: another test run on the same domain cannot answer for them
 GOAL_TREE = tree_xml('<KeepRunningUntilFailure><SetBlackboard value="{goal_status}" output_key="seen"/>'
                      '</KeepRunningUntilFailure>')
 
@@ -40,7 +41,8 @@ def domain() -> int:
 def robot(domain):
     saved = os.environ.get("CYCLONEDDS_URI")
     os.environ["CYCLONEDDS_URI"] = dds.loopback_config()  # the child's DDS on loopback too
-    proc = SimRobotProcess(domain, "--world", str(MAP_YAML), "--refuse-activate", "behavior_server", duration=120)
+    proc = SimRobotProcess(domain, "--namespace", NS, "--world", str(MAP_YAML), "--refuse-activate", "behavior_server",
+                           duration=120)
     if saved is None:
         del os.environ["CYCLONEDDS_URI"]
     else:
@@ -59,7 +61,7 @@ def loopback(monkeypatch):
 
 def nav_config(domain: int, bringup: list[str]) -> Ros2Config:
     components = {n: {"kind": "navigation", "heartbeat": "lifecycle", "lifecycle_node": n} for n in NAV}
-    return Ros2Config(domain_id=domain, components=components,
+    return Ros2Config(domain_id=domain, namespace=NS, components=components, topics={"diagnostics": "diagnostics"},
                       lifecycle={"bringup": {"node_names": bringup, "service_timeout": 15.0},
                                  "transition_timeout": 5.0})
 
@@ -68,7 +70,7 @@ async def test_a_late_subscriber_receives_the_map(robot, domain):
     from sim.nav.occupancy import OccupancyGrid
 
     await asyncio.sleep(1.0)  # well after sim-robot published it
-    node = dds.DdsNode(domain, loop=asyncio.get_running_loop())
+    node = dds.DdsNode(domain, loop=asyncio.get_running_loop(), namespace=NS)
     maps: list = []
     try:
         node.subscription("map", idl.OccupancyGrid, dds.QosProfile(reliable=True, transient_local=True, depth=1),
@@ -114,9 +116,9 @@ async def test_bring_up_in_order_and_a_node_that_will_not_activate(robot, domain
     runtime = AutonomyRuntime(driver, realtime=True)
     runtime.load_tree(GOAL_TREE)
     runtime.tree.root_blackboard.set("goal_status", "IDLE")
-    listener = dds.DdsNode(domain, loop=asyncio.get_running_loop())
+    listener = dds.DdsNode(domain, loop=asyncio.get_running_loop(), namespace=NS)
     arrays: list = []
-    listener.subscription("/diagnostics", idl.DiagnosticArray, dds.DEFAULT,
+    listener.subscription("diagnostics", idl.DiagnosticArray, dds.DEFAULT,
                           lambda samples, _now: arrays.extend(samples))
     await runtime.start()
     try:
