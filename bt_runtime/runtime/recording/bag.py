@@ -44,6 +44,11 @@ class Rosbag2Bag:
         self._seg_start = 0
         self._seg_end = 0
 
+    @property
+    def idle(self) -> bool:
+        """No segment open (the next message opens one)."""
+        return self._writer is None and not self.closed
+
     def open_segment(self) -> None:
         """Attach a new MCAP file to the channels (before the first message that goes into it)."""
         if self._writer is not None or self.closed:

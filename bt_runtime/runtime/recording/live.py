@@ -38,11 +38,11 @@ class FoxgloveLive:
     def url(self) -> str:
         return f"ws://{self.host}:{self.port}"
 
-    def sent(self, topic: str, channel: Any, t_ns: int, data: bytes) -> None:
+    def sent(self, topic: str, t_ns: int, data: bytes) -> None:
         """Called after each logged message: keeps latched ones, tells clients the robot time."""
         if topic in self.channels.latched:
             with self._lock:
-                self._latched[topic] = (channel, t_ns, data)
+                self._latched[topic] = (self.channels.channels[topic], t_ns, data)
         if t_ns > self._last_time_ns + 50_000_000:  # 20 Hz at most
             self._last_time_ns = t_ns
             self.server.broadcast_time(t_ns)

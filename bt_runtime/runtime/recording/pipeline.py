@@ -126,30 +126,39 @@ class RecordPipeline:
             self._stop.wait(0.02)
 
     def _write_one(self, kind: str, topic: str, t: float, payload: Any) -> None:
-        bag, live, channels = self.bag, self.live, self.channels.channels
+        bag = self.bag
         try:
-            if bag is not None:
-                bag.open_segment()
-            elif kind in SKIPPABLE:  # live view only: nothing to convert for a topic nobody watches
-                channel = channels.get(topic)
-                if channel is not None and not channel.has_sinks() and topic not in self.channels.latched:
+            if bag is None:
+                if kind in SKIPPABLE and self._unwatched(topic):
+                    return  # live view only: nothing to convert for a topic nobody watches
+                if kind == "odom" and self._unwatched(topic) and self._unwatched(self.state.tf_topic):
+                    self.state.odom_pose = (payload.pose.x, payload.pose.y, payload.pose.yaw)  # for map -> odom
                     return
+            elif bag.idle:
+                bag.open_segment()
             t_ns = max(0, int(round(t * 1e9)))
+            loggers, written = self.channels.loggers, self.written
             for name, typename, msg in CONVERTERS[kind](self.state, topic, t, payload):
-                channel = channels.get(name)
-                if channel is None:
+                logger = loggers.get(name)
+                if logger is None:
                     latched = name in self.latched_topics or typename in LATCHED_TYPES
-                    channel = self.channels.add(name, typename, latched=latched)
-                if bag is None and not channel.has_sinks() and name not in self.channels.latched:
+                    self.channels.add(name, typename, latched=latched)
+                    logger = loggers[name]
+                if bag is None and self._unwatched(name):
                     continue  # live view only, and nobody subscribed to this topic
                 data = msg if type(msg) is bytes else serialize(msg, typename)
                 if bag is not None:
                     bag.count(name, t_ns)
-                channel.log(data, log_time=t_ns)
-                if live is not None:
-                    live.sent(name, channel, t_ns, data)
-                self.written[name] = self.written.get(name, 0) + 1
+                logger(data, t_ns)
+                if self.live is not None:
+                    self.live.sent(name, t_ns, data)
+                written[name] = written.get(name, 0) + 1
         except Exception as exc:
             self.errors += 1
             if self.errors <= 5:
                 log.error("recording_message_failed", kind=kind, topic=topic, error=repr(exc))
+
+    def _unwatched(self, topic: str) -> bool:
+        """Live view only: a topic with a channel, no subscriber, and nothing to keep for later ones."""
+        channel = self.channels.channels.get(topic)
+        return channel is not None and not channel.has_sinks() and topic not in self.channels.latched
