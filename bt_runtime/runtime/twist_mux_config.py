@@ -22,8 +22,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import structlog
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+log = structlog.get_logger("bt_runtime.gate")
 
 TREE_NAMES = ("tree",)
 NAV_NAMES = ("navigation", "nav")
@@ -75,6 +78,7 @@ class TwistMuxFileError(ValueError):
 class _Section(_Model):
     topics: dict[str, MuxInputConfig] = Field(default_factory=dict)
     locks: dict[str, MuxLockConfig] = Field(default_factory=dict)
+    use_stamped: bool = Field(False, description="twist_mux >= 4.4: every input is TwistStamped")
 
 
 def load_twist_mux_file(path: str | Path) -> tuple[dict[str, MuxInputConfig], dict[str, MuxLockConfig]]:
@@ -94,12 +98,19 @@ def load_twist_mux_file(path: str | Path) -> tuple[dict[str, MuxInputConfig], di
         where = f":{mark.line + 1}" if mark is not None else ""
         raise TwistMuxFileError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', exc)})") from None
     section, prefix = _parameters(path, data)
+    ignored = sorted(str(k) for k in section if k not in _Section.model_fields)
+    if ignored:  # the node's other parameters (use_sim_time, qos_overrides...) do not concern the gate
+        log.info("twist_mux_file_keys_ignored", file=str(path), keys=ignored)
+        section = {k: v for k, v in section.items() if k in _Section.model_fields}
     try:
         parsed = _Section.model_validate(section)
     except ValidationError as exc:
         raise TwistMuxFileError(f"{path}: " + "; ".join(_plain(exc, prefix))) from None
     if not parsed.topics and not parsed.locks:
         raise TwistMuxFileError(f"{path}: '{prefix}' has neither 'topics' nor 'locks'")
+    if parsed.use_stamped:
+        for spec in parsed.topics.values():
+            spec.stamped = True
     return parsed.topics, parsed.locks
 
 

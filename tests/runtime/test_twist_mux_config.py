@@ -87,3 +87,11 @@ def test_run_flag_replaces_the_configured_inputs(tmp_path):
     bad.write_text("twist_mux:\n  ros__parameters:\n    topics:\n      idle: {topic: x, timeout: 1, priority: 3}\n")
     with pytest.raises(UsageError, match="--twist-mux .*bad.yaml: inputs.idle: the name is reserved"):
         load_config(None, bad)
+
+
+def test_the_nodes_other_parameters_are_ignored_and_use_stamped_is_honoured(tmp_path):
+    path = tmp_path / "twist_mux.yaml"
+    path.write_text("twist_mux:\n  ros__parameters:\n    use_sim_time: true\n    use_stamped: true\n"
+                    "    topics:\n      joy: {topic: joy_vel, timeout: 0.5, priority: 100}\n")
+    inputs, locks = load_twist_mux_file(path)
+    assert inputs["joy"].stamped and locks == {}
