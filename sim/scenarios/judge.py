@@ -143,24 +143,32 @@ def obstacle_in_map(rec: RunRecord, c: ObstacleInMap) -> Verdict:
     near = [r for r in marks if shape.distance(r.goal.x, r.goal.y) <= c.within]
     if near:
         return Verdict(name, True, f"{len(near)} map mark(s) within {c.within} m of it")
+    if c.only_if_hit and not _hits(rec, c.obstacle):
+        return Verdict(name, True, "never touched it, nothing to mark")
     return Verdict(name, False, f"not in the map ({len(marks)} mark(s) elsewhere)" if marks else "not in the map")
 
 
-def hit_once(rec: RunRecord, c: HitOnce) -> Verdict:
-    """From the simulator's collision events (true contacts, for judging only)."""
-    name = f"hit_once({c.obstacle})"
+def _hits(rec: RunRecord, obstacle: str, merge: float = 0.5) -> list[float]:
+    """Times the robot ran into ``obstacle``, from the simulator's collision events (true
+    contacts, for judging only); contacts less than ``merge`` s apart are one hit (a bounce)."""
 
     def ours(e) -> bool:
         key = str(e.data.get("obstacle", ""))
-        return key == c.obstacle or key.endswith(":" + c.obstacle)
+        return key == obstacle or key.endswith(":" + obstacle)
 
     hits, last_end = [], None
     for e in rec.sim_events:
         if e.kind == "collision" and ours(e):
-            if not hits or last_end is None or e.t - last_end > c.merge:
+            if not hits or last_end is None or e.t - last_end > merge:
                 hits.append(e.t)
         elif e.kind == "collision_end" and ours(e):
             last_end = e.t
+    return hits
+
+
+def hit_once(rec: RunRecord, c: HitOnce) -> Verdict:
+    name = f"hit_once({c.obstacle})"
+    hits = _hits(rec, c.obstacle, c.merge)
     if len(hits) <= 1:
         return Verdict(name, True, f"hit {len(hits)}x" + (f" (at {hits[0]:.2f} s)" if hits else ""))
     return Verdict(name, False, f"hit {len(hits)}x, at " + ", ".join(f"{t:.2f}" for t in hits) + " s")

@@ -114,6 +114,9 @@ class ObstacleInMap(_Model):
     kind: Literal["obstacle_in_map"]
     obstacle: str = Field(description="name of the obstacle a fault created")
     within: float = Field(0.3, description="m between the mark and the obstacle")
+    only_if_hit: bool = Field(False, description="an obstacle the robot never touched needs no mark "
+                                                 "(variants: the robot may pass a box placed on the "
+                                                 "static plan without touching it)")
 
 
 class HitOnce(_Model):

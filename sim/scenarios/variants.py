@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from .box_check import path_with_box
 from .runspec import RunSpec
 from .spec import ScenarioSpec
 
@@ -305,6 +306,23 @@ def unreachable_goal_variant(rng: np.random.Generator, index: int) -> ScenarioSp
 
 # -- collisions ----------------------------------------------------------------------------------
 
+def _box_on_path(rng: np.random.Generator, world: str, robot: str, start, goal, how: str) -> dict[str, float]:
+    """A 0.3 m box on the static-map path, 35-60 % along it: square to it, turned 0.4-1 rad
+    (oblique), or also 0.1-0.18 m to a side (corner)."""
+    from bt_runtime.runtime.messages import Pose2D
+
+    planner, _ = _planner(world, robot)
+    pts = planner.plan(Pose2D(*start[:2]), Pose2D(*goal[:2])).points
+    along = float(rng.uniform(0.35, 0.6))
+    i = int(along * (len(pts) - 1))
+    x, y, heading = float(pts[i, 0]), float(pts[i, 1]), float(pts[min(i + 3, len(pts) - 1), 2])
+    yaw = heading + (float(rng.uniform(0.4, 1.0)) * (1 if rng.integers(2) else -1) if how != "on_path" else 0.0)
+    lateral = float(rng.uniform(0.1, 0.18)) * (1 if rng.integers(2) else -1) if how == "corner" else 0.0
+    x -= lateral * math.sin(heading)
+    y += lateral * math.cos(heading)
+    return {"x": round(x, 3), "y": round(y, 3), "yaw": round(yaw, 3), "width": 0.3, "depth": 0.3}
+
+
 def collision_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
     world, robot = _choice(rng, WORLDS), _choice(rng, ROBOTS)
     start, goal, length = _trip(rng, world, robot, min_len=2.5)
@@ -317,23 +335,20 @@ def collision_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
                                  "name": "hitter"}, "at": 2.0})
         faults.append({"fault": {"kind": "push", "impulse": float(rng.uniform(0.5, 1.2)),
                                  "direction": 3.1416}, "at": 2.0})
+        success.append({"kind": "hit_once", "obstacle": "hitter"})
         goals = [{"at": 6.0, "pose": _pose(goal)}]
     else:
-        planner, _ = _planner(world, robot)
-        from bt_runtime.runtime.messages import Pose2D
-
-        res = planner.plan(Pose2D(*start[:2]), Pose2D(*goal[:2]))
-        pts = res.points
-        along = float(rng.uniform(0.35, 0.6))
-        i = int(along * (len(pts) - 1))
-        x, y, heading = float(pts[i, 0]), float(pts[i, 1]), float(pts[min(i + 3, len(pts) - 1), 2])
-        yaw = heading + (float(rng.uniform(0.4, 1.0)) * (1 if rng.integers(2) else -1) if how != "on_path" else 0.0)
-        lateral = float(rng.uniform(0.1, 0.18)) * (1 if rng.integers(2) else -1) if how == "corner" else 0.0
-        x -= lateral * math.sin(heading)
-        y += lateral * math.cos(heading)
-        faults.append({"fault": {"kind": "invisible_obstacle", "x": round(x, 3), "y": round(y, 3),
-                                 "yaw": round(yaw, 3), "width": 0.3, "depth": 0.3, "name": "low_box"}, "at": 0.0})
-        success.insert(1, {"kind": "obstacle_in_map", "obstacle": "low_box", "within": 0.3})
+        box = None
+        for _ in range(30):  # a box that leaves the goal reachable (sim/scenarios/box_check.py)
+            box = _box_on_path(rng, world, robot, start, goal, how)
+            detour = path_with_box(world, robot, start[:2], goal[:2], box)
+            if detour < math.inf:
+                length = max(length, detour)
+                break
+            start, goal, length = _trip(rng, world, robot, min_len=2.5)
+        faults.append({"fault": {"kind": "invisible_obstacle", **box, "name": "low_box"}, "at": 0.0})
+        success.insert(1, {"kind": "obstacle_in_map", "obstacle": "low_box", "within": 0.3, "only_if_hit": True})
+        success.append({"kind": "hit_once", "obstacle": "low_box"})
         goals = [{"at": 1.0, "pose": _pose(goal)}]
     return _spec(f"V{index:04d}_collision", "II", f"{how.replace('_', ' ')} collision ({robot} in {world})",
                  requirements=["fn_req2", "fn_req6"], world=world, robot=robot, start=_pose(start),

@@ -3,9 +3,12 @@ campaign like shipped scenarios, and the layer handling a few of them."""
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from bt_runtime.logging_setup import quiet_logging
+from sim.scenarios.box_check import path_with_box
 from sim.scenarios.runner import run_scenario
 from sim.scenarios.variants import FAMILIES, family_of, generate
 
@@ -41,3 +44,33 @@ def test_the_layer_handles_variants(family):
     for run in generate(2, seed=5, families=[family]):
         result = run_scenario(run.scenario, run.mode, run.seed, keep_record=False)
         assert result.success, (run.scenario.description, result.reasons)
+
+
+def test_a_collision_box_that_cuts_the_goal_off_is_not_drawn():
+    """A 0.3 m box across the apartment's hall door leaves no way for a waffle (fair variants
+    only: no layer could reach that goal); the same box in the open room leaves one."""
+    start, goal = (1.1, 0.45), (3.6, 0.7)  # along the corridor north of the hall wall
+    door = {"x": 2.0, "y": 0.45, "yaw": 0.0, "width": 0.3, "depth": 0.3}
+    assert path_with_box("apartment", "waffle", start, goal, {**door, "width": 0.6}) == math.inf
+    assert path_with_box("apartment", "waffle", (-3.0, -3.0), (0.0, -3.0), {**door, "x": -1.5, "y": -3.0}) < 4.0
+    for run in generate(12, seed=2026, families=["collision"]):
+        box = next((f.fault for f in run.scenario.faults if f.fault.get("name") == "low_box"), None)
+        if box is None:
+            continue
+        start, goal = run.scenario.start, run.scenario.goals[0].pose
+        assert path_with_box(run.scenario.world, run.scenario.robot, (start.x, start.y), (goal.x, goal.y),
+                             box) < math.inf
+
+
+def test_a_box_the_robot_never_touched_needs_no_mark():
+    from sim.scenarios.judge import obstacle_in_map
+    from sim.scenarios.spec import ObstacleInMap
+    from sim.world import CircleObstacle
+
+    record = type("R", (), {"obstacles": {"low_box": CircleObstacle(center=(0.0, 0.0), radius=0.2)},
+                            "nav_requests": [], "sim_events": []})()
+    assert obstacle_in_map(record, ObstacleInMap(kind="obstacle_in_map", obstacle="low_box", only_if_hit=True)).passed
+    assert not obstacle_in_map(record, ObstacleInMap(kind="obstacle_in_map", obstacle="low_box")).passed
+    record.sim_events = [type("E", (), {"t": 3.0, "kind": "collision", "data": {"obstacle": "dyn:low_box"}})()]
+    assert not obstacle_in_map(record, ObstacleInMap(kind="obstacle_in_map", obstacle="low_box",
+                                                     only_if_hit=True)).passed
