@@ -288,7 +288,9 @@ class RegulatedPurePursuit:
         # Deviation from Nav2 (docs/nav.md): a robot whose own cell is already inscribed (e.g.
         # beside its collision mark) may make any motion that does not take it deeper, as the
         # behaviours may; Nav2's RPP refuses every command there.
-        d_now = cm.distance_at(x, y) if cm.in_collision(x, y) else math.inf
+        # (Distances are between cell centres: half a cell of slack, so a step past a lethal cell
+        # on the way out is not read as "deeper".)
+        d_now = cm.distance_at(x, y) - cm.resolution / 2 if cm.in_collision(x, y) else math.inf
         if abs(v) < 0.01 and abs(w) > 0.01:
             # rotating in place: a circular footprint sweeps nothing new
             return False

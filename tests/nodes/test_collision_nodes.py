@@ -117,3 +117,21 @@ async def test_an_oblique_corner_hit_is_marked_across_the_sensed_arc(runtime, ro
     assert min(math.hypot(hit[0] - x, hit[1] - y) - r for x, y, r in discs) < 0.05
     assert len(sim.events_of("collision")) == 1
     await rt.stop()
+
+
+async def test_a_robot_standing_beside_its_own_mark_drives_away_to_its_goal(runtime):
+    """The robot's own cell is inscribed (its collision mark lies right beside it): planning and
+    the controller must still let it leave, not refuse every command until the time limit."""
+    xml = tree_xml('<Sequence><Delay delay_msec="500"><AlwaysSuccess/></Delay>'
+                   '<NavigateToPose goal="-1.0;-2.3;0.0" error_code_id="{code}"/></Sequence>')
+    rt = await runtime(xml, robot="waffle")
+    sim = rt.driver.sim
+    nav = rt.driver.navigation
+    await nav.add_obstacle(sim.pose.x, sim.pose.y + 0.17, 0.04)
+    assert nav.global_costmap.distance_field().min() == 0.0
+    assert nav.global_costmap.cost_at(sim.pose.x, sim.pose.y) >= 253  # inscribed: "in collision"
+    done = rt.restart_tree()
+    status = await asyncio.wait_for(done, 40.0)
+    assert status.name == "SUCCESS", rt.tree.root_blackboard.get("code", default=None)
+    assert math.hypot(sim.pose.x + 1.0, sim.pose.y + 2.3) < 0.3
+    await rt.stop()

@@ -4,9 +4,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
+from bt_runtime.runtime.messages import Pose2D
 from nodes.contact import ContactArc, ObstacleMarks, segments_arc
+from sim.nav.costmap import GlobalCostmap
+from sim.nav.occupancy import OccupancyGrid
+from sim.nav.params import PlannerParams
+from sim.nav.planner import GridPlanner
 from sim.robot import load_profile
 
 BURGER = load_profile("burger").bumper.spans()  # front, left, rear, right (90 deg each)
@@ -53,3 +59,33 @@ def test_a_second_hit_near_a_mark_grows_it_and_a_far_one_starts_another():
     assert again == 0 and discs == []
     other, _ = marks.place([(3.0, 3.0)], 0.1, 0.3)
     assert other == 1 and len(marks.marks) == 2
+
+
+def _corridor() -> OccupancyGrid:
+    """A 4 m corridor, free for y in [0.1, 1.2] (walls below and above)."""
+    data = np.zeros((26, 80), np.int8)
+    data[:2, :] = 100
+    data[24:, :] = 100
+    return OccupancyGrid(data, 0.05, (0.0, 0.0, 0.0))
+
+
+def _marked_corridor(disc: float, margin: float) -> GridPlanner:
+    """A burger drove along y = 0.5 into the top-left corner (1.9, 0.45) of a 0.3 m box that
+    stands against the lower wall; its front segment closed. Marks as MarkObstacle makes them."""
+    radius = 0.105
+    x = 1.9 - math.sqrt(radius**2 - 0.05**2)
+    arc = ContactArc(x, 0.5, *segments_arc(BURGER, (0,)), radius)
+    costmap = GlobalCostmap(_corridor(), radius)
+    _, discs = ObstacleMarks().place(arc.chord(radius + disc, margin), disc, 0.3)
+    for dx, dy, r in discs:
+        costmap.add_obstacle(dx, dy, r)
+    assert min(math.hypot(dx - 1.9, dy - 0.45) - r for dx, dy, r in discs) < 0.05  # covers the contact
+    return GridPlanner(costmap, PlannerParams())
+
+
+def test_marks_leave_open_the_corridor_the_box_leaves_open():
+    """The box leaves 0.75 m of the corridor free; the mark of the corner hit (the tree's 0.1 m
+    discs, 0.05 m margin) must not close it, as the earlier 0.2 m discs with 0.1 m did."""
+    start, goal = Pose2D(0.5, 0.7), Pose2D(3.5, 0.7)
+    assert _marked_corridor(0.1, 0.05).plan(start, goal).ok
+    assert not _marked_corridor(0.2, 0.1).plan(start, goal).ok
