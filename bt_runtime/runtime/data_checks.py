@@ -3,7 +3,9 @@
 A driver can keep publishing and still be broken: it republishes its last message (the stamp
 stops advancing), it re-stamps one frozen reading (a scan or IMU reading identical to the previous
 one, which sensor noise never produces), or its data is invalid (NaN/inf where a number must be, or a
-share of scan ranges that are NaN or outside [range_min, range_max] above a threshold). Each
+share of scan ranges that are NaN or outside [range_min, range_max] above a threshold), or its pose
+is frozen while the robot is commanded to move and other sensors show that it does (odometry,
+localization: ``motion_check``). Each
 check returns None for a good message or a short reason; the supervisor fails a component
 whose data has been bad for longer than its timeout, with that reason.
 
@@ -18,15 +20,17 @@ from typing import Any
 import numpy as np
 
 from .messages import BatteryState, Imu, LaserScan, LocalizedPose, Odometry
+from .motion_check import MotionWitness
 
 
 class DataCheck:
     """Checks the messages of one stream, remembering what it needs from the previous one."""
 
-    __slots__ = ("invalid_share", "_stamp", "_ranges", "_imu")
+    __slots__ = ("invalid_share", "_stamp", "_ranges", "_imu", "_motion")
 
-    def __init__(self, invalid_share: float = 0.3):
+    def __init__(self, invalid_share: float = 0.3, motion: MotionWitness | None = None):
         self.invalid_share = invalid_share
+        self._motion = motion
         self._stamp: float | None = None
         self._ranges: np.ndarray | None = None
         self._imu: tuple[float, float, float] | None = None
@@ -52,10 +56,12 @@ class DataCheck:
             return None
         if kind is Odometry:
             p, t = msg.pose, msg.twist
-            return _non_finite(p.x, p.y, p.yaw, t.linear, t.angular)
+            problem = _non_finite(p.x, p.y, p.yaw, t.linear, t.angular)
+            return problem if problem is not None or self._motion is None else self._motion.frozen("odom", p)
         if kind is LocalizedPose:
             p = msg.pose
-            return _non_finite(p.x, p.y, p.yaw)
+            problem = _non_finite(p.x, p.y, p.yaw)
+            return problem if problem is not None or self._motion is None else self._motion.frozen("pose", p)
         if kind is BatteryState:
             return _non_finite(msg.percentage, msg.voltage)
         return None

@@ -2,8 +2,9 @@
 
 Each component proves it is alive by its messages (sensor streams, navigation heartbeats, the
 tree's own tick heartbeat). Only fresh, plausible data counts (``data_checks``): a driver that
-republishes old messages, repeats one frozen scan or sends NaN/out-of-range data is as broken
-as a silent one. No good data for longer than its timeout (default 1 s) -> FAILED, with the
+republishes old messages, repeats one frozen scan, sends NaN/out-of-range data, or publishes a
+frozen pose while the robot is driven and other sensors show it moving (``motion_check``) is as
+broken as a silent one. No good data for longer than its timeout (default 1 s) -> FAILED, with the
 reason (silent, stale data, invalid data). Restarts
 happen on request (the tree asks) or automatically; after ``max_failed_restarts`` (2) failed
 restarts a component is DEAD, and a dead critical component stops the robot through the
@@ -25,6 +26,7 @@ from .bringup import BringupReport, NodeOutcome, bring_up
 from .config import SupervisorConfig
 from .data_checks import DataCheck
 from .messages import ComponentInfo
+from .motion_check import MotionWitness
 
 if TYPE_CHECKING:
     from .driver import RobotDriver
@@ -100,12 +102,18 @@ class SystemSupervisor:
         self._started_at = 0.0
         self._listeners: list[Callable[[SupervisorEvent], Any]] = []
         self._dead: set[str] = set()
+        self.motion: MotionWitness | None = None
         self.bringup = BringupReport()  # the lifecycle bring-up at start (bring_up())
 
     # -- setup ---------------------------------------------------------------------------------
     def attach(self) -> None:
         """Watch every component the driver reports, through its streams."""
         self._started_at = self.clock()
+        if self.config.check_data:  # commanded vs measured motion, for the frozen-pose check
+            witness = self.motion = MotionWitness(self.clock)
+            for stream, callback in (("cmd_vel_out", witness.on_command), ("imu", witness.on_imu),
+                                     ("scan", witness.on_scan)):
+                self._unsubscribe.append(self.driver.subscribe(stream, callback))
         for info in self.driver.components():
             self._watch_driver_component(info)
 
@@ -152,7 +160,7 @@ class SystemSupervisor:
 
     def _seen_callback(self, record: ComponentRecord) -> Callable[[Any], None]:
         clock = self.clock
-        check = DataCheck(self.config.invalid_share) if self.config.check_data else None
+        check = DataCheck(self.config.invalid_share, self.motion) if self.config.check_data else None
 
         def seen(msg: Any) -> None:
             now = clock()

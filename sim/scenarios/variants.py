@@ -122,11 +122,14 @@ def _choice(rng: np.random.Generator, items):
 
 # -- sensor failures -----------------------------------------------------------------------------
 
-def _sensor_fault(rng: np.random.Generator, component: str) -> tuple[str, list[dict[str, Any]]]:
+def _sensor_fault(rng: np.random.Generator, component: str, frozen_pose_detectable: bool = False
+                  ) -> tuple[str, list[dict[str, Any]]]:
     """A way for a sensor driver to fail: crash, hang, stale or NaN data, garbage, flapping,
-    or a first restart that fails."""
+    or a first restart that fails; frozen (one reading re-stamped). A frozen odometry or
+    localization pose is only detectable while the robot is told to move and the lidar or the
+    IMU shows that it does (a standing robot's pose rightly stays put): ``frozen_pose_detectable``."""
     ways = ["crash", "hang", "stale", "nan", "flapping", "restart_fails"]
-    if component in ("lidar", "imu"):  # noisy sensors: a re-stamped frozen reading shows
+    if component in ("lidar", "imu") or frozen_pose_detectable:  # a re-stamped frozen reading shows
         ways.append("frozen")
     if component == "lidar":  # plausible-looking garbage is detectable by range checks only in a scan
         ways.append("garbage")
@@ -154,8 +157,9 @@ def sensor_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
     components = list(rng.choice(SENSORS, size=2 if two else 1, replace=False))
     faults, hows = [], []
     t_fault = float(rng.uniform(1.0, 3.0)) if not driving else float(rng.uniform(1.0, 5.0))
+    witnesses_ok = not {"lidar", "imu"} & set(components)  # what shows a frozen pose is moving
     for comp in components:
-        how, steps = _sensor_fault(rng, comp)
+        how, steps = _sensor_fault(rng, comp, driving and witnesses_ok)
         hows.append(f"{comp} {how}")
         for step in steps:
             later = step.pop("_later", 0.0)
