@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from bt_runtime import BehaviorTreeFactory
 
-from . import battery, collision, goals, health, motion_safety, path, safety_zones
+from . import battery, collision, docking, goals, health, motion_safety, path, safety_zones
 from .nav2 import register_nav2_nodes
 
 AUTONOMY_NODES = [
@@ -17,7 +17,7 @@ AUTONOMY_NODES = [
     health.EmergencyStop, health.ReleaseEmergencyStop, health.IsSafeToContinue, health.RestartServerAfterError,
     collision.CollisionDetected, collision.InContact, collision.EstimateContactPoint, collision.ReverseOut,
     collision.StopRobot, collision.ReleaseRobot, collision.MarkObstacle, collision.ClearCostmaps,
-    battery.BatteryCanReach, battery.BatteryAbove, battery.RefuseGoal,
+    battery.BatteryCanReach, battery.BatteryAbove, battery.RefuseGoal, docking.ChargeUntil, docking.GoalStatusIs,
     path.RatePathQuality, path.PathReachesGoal, path.PlannerAnswers,
     path.FindAlternativeGoal, path.EscapeInflation,
     goals.GoalPending, goals.SetGoalStatus, goals.RetryGoal,

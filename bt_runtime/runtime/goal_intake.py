@@ -1,7 +1,7 @@
 """Goals from any client (Python API, a ROS 2 action, a goal topic) handed to the running tree.
 
 The tree's side is the blackboard hand-off trees/autonomy.xml already uses: the sender writes
-``{goal}`` and ``{goal_status} = 'PENDING'``; the tree marks it ``ACTIVE``, then ``SUCCEEDED``,
+``{goal}`` and ``{goal_status} = 'PENDING'``; the tree marks it ``ACTIVE`` (or ``CHARGING``), then ``SUCCEEDED``,
 ``ABORTED`` or ``REFUSED`` (with ``{goal_reason}``, and ``{goal_detail}`` when an alternative
 goal was used). ``GoalIntake`` keeps the requests and their handles and drives that hand-off
 from the tick loop's after-tick callback, so it never races a tick:
@@ -12,7 +12,11 @@ from the tick loop's after-tick callback, so it never races a tick:
   ``GoalPending`` fails and the mission is halted (its navigation action cancelled); the goal
   ends CANCELED right after that tick; a preempted goal is released the same way before the next is handed over;
 * while a goal runs, feedback (pose, distance remaining, time, recoveries) is computed from
-  what the runtime sees (the backup's pose, the tree's ``{path}``) at ``feedback_hz``.
+  what the runtime sees (the backup's pose, the tree's ``{path}``) at ``feedback_hz``;
+* a goal the tree refuses for battery while it can dock (``goal_status = 'CHARGING'``) is
+  **kept**: its state is ``CHARGING`` (``refusals`` counts it) while the robot docks and
+  charges, and ``EXECUTING`` again when the tree hands it back; a ROS 2 client sees the action
+  still executing, with feedback.
 
 Driver-agnostic: ``runtime.send_goal(pose)`` works with the simulator and with ROS 2; the
 ROS 2 driver's action server (ros2/action_server.py) is one more client of ``submit``.
@@ -36,7 +40,7 @@ from .messages import LocalizedPose, Odometry, Path, Pose2D
 
 log = structlog.get_logger("bt_runtime.goals")
 
-OPEN = ("PENDING", "ACTIVE")
+OPEN = ("PENDING", "ACTIVE", "CHARGING")  # CHARGING: refused for battery, kept while the robot charges
 TREE_DONE = ("SUCCEEDED", "ABORTED", "REFUSED")
 # nav2_msgs/action/NavigateToPose result codes (Jazzy): NONE, UNKNOWN
 NONE, UNKNOWN = 0, 9000
@@ -49,6 +53,7 @@ class GoalState:
     PENDING = "PENDING"          # queued, not yet handed to the tree
     EXECUTING = "EXECUTING"      # handed over (the tree has it PENDING or ACTIVE)
     CANCELING = "CANCELING"      # cancel or preemption asked; waiting for the tree to let go
+    CHARGING = "CHARGING"        # refused for battery and kept: the robot docks, charges, resumes it
     SUCCEEDED = "SUCCEEDED"
     ABORTED = "ABORTED"
     CANCELED = "CANCELED"
@@ -103,6 +108,7 @@ class GoalHandle:
         self.result_future: asyncio.Future = intake.loop.create_future()
         self.submitted_at = intake.clock()
         self.started_at: float | None = None
+        self.refusals = 0  # times the tree refused it for battery and kept it to charge first
         self._intake = intake
         self._end_as: GoalResult | None = None  # set by cancel / preemption
 
@@ -252,6 +258,13 @@ class GoalIntake:
             self._finish(handle, GoalResult(GoalState.ABORTED, str(tree_status) or "ABORTED", UNKNOWN,
                                             f"goal status set to {tree_status!r} outside the goal intake"))
             return
+        charging = tree_status == "CHARGING"
+        if charging != (handle.state is GoalState.CHARGING):
+            handle.state = GoalState.CHARGING if charging else GoalState.EXECUTING
+            if charging:
+                handle.refusals += 1
+            log.info("goal_kept_for_charging" if charging else "goal_resumed", id=handle.id,
+                     goal=handle.pose.to_string(), sim_time=round(self.clock(), 3))
         now = self.clock()
         if now >= self._next_feedback:
             self._next_feedback = now + self.feedback_period

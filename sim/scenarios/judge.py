@@ -16,6 +16,7 @@ from ..component_log import first_fault, restarts
 from .record import RunRecord
 from .spec import (
     AlternativeReached,
+    ChargedThenReached,
     ComponentReset,
     GoalRefused,
     HitOnce,
@@ -77,14 +78,68 @@ def _reached(rec: RunRecord, index: int, tolerance: float) -> tuple[bool, float,
     return bool(len(hit)), float(dist.min()), (float(traj[hit[0], T]) if len(hit) else None)
 
 
+def _window(rec: RunRecord, index: int) -> tuple[float, float | None]:
+    goal = rec.goals[index]
+    return goal.sent, rec.goals[index + 1].sent if index + 1 < len(rec.goals) else None
+
+
+def _charging(rec: RunRecord, t0: float, t1: float | None) -> list:
+    """The simulator's true charging events (contacts touching, current flowing) in [t0, t1)."""
+    return [e for e in rec.sim_events if e.kind in ("charging_started", "charging_stopped")
+            and e.t >= t0 and (t1 is None or e.t < t1)]
+
+
 def reach_goal(rec: RunRecord, c: ReachGoal) -> Verdict:
     name = f"reach_goal({c.goal})"
     if c.goal >= len(rec.goals):
         return Verdict(name, False, "the goal was never sent")
     ok, closest, when = _reached(rec, c.goal, c.tolerance)
-    if ok:
-        return Verdict(name, True, f"stopped within {c.tolerance} m at {when:.2f} s")
-    return Verdict(name, False, f"not reached: closest approach {closest:.2f} m")
+    if not ok:
+        return Verdict(name, False, f"not reached: closest approach {closest:.2f} m")
+    if c.without_charging:
+        charged = [e for e in _charging(rec, rec.goals[c.goal].sent, when) if e.kind == "charging_started"]
+        if charged:
+            return Verdict(name, False, f"reached at {when:.2f} s, but only after docking to charge at "
+                                        f"{charged[0].t:.2f} s (the battery was enough)")
+    return Verdict(name, True, f"stopped within {c.tolerance} m at {when:.2f} s")
+
+
+def charged_then_reached(rec: RunRecord, c: ChargedThenReached) -> Verdict:
+    """Refused at first (no navigation towards the goal before charging began), docked and
+    charged (true charging events, state of charge rising), then stopped at the goal."""
+    name = f"charged_then_reached({c.goal})"
+    if c.goal >= len(rec.goals):
+        return Verdict(name, False, "the goal was never sent")
+    goal = rec.goals[c.goal]
+    t0, t1 = _window(rec, c.goal)
+    events = _charging(rec, t0, t1)
+    starts = [e for e in events if e.kind == "charging_started"]
+    if not starts:
+        _, closest, _ = _reached(rec, c.goal, c.tolerance)
+        return Verdict(name, False, f"never docked to charge (closest approach to the goal {closest:.2f} m)")
+    began = starts[0]
+    early = [r for r in rec.nav_requests if r.method in ("navigate_to_pose", "follow_path") and r.goal is not None
+             and r.goal.distance_to(goal.pose) < 0.3 and t0 <= r.t < began.t]
+    if early:
+        return Verdict(name, False, f"drove towards it before charging: {len(early)} navigation request(s) "
+                                    f"before {began.t:.2f} s")
+    stops = [e for e in events if e.kind == "charging_stopped" and e.t > began.t]
+    if not stops:
+        return Verdict(name, False, f"charging from {began.t:.2f} s never ended (still on the dock)")
+    stop = stops[0]
+    soc0, soc1 = float(began.data.get("soc", math.nan)), float(stop.data.get("soc", math.nan))
+    if not soc1 > soc0:
+        return Verdict(name, False, f"docked at {began.t:.2f} s but the charge did not rise ({soc0:.1f} -> {soc1:.1f} %)")
+    traj = _after(rec.trajectory, stop.t, t1)
+    if not len(traj):
+        return Verdict(name, False, "no trajectory after charging")
+    dist = np.hypot(traj[:, X] - goal.pose.x, traj[:, Y] - goal.pose.y)
+    hit = np.flatnonzero((dist <= c.tolerance) & (np.abs(traj[:, V]) < STOPPED))
+    if not len(hit):
+        return Verdict(name, False, f"charged {soc0:.1f} -> {soc1:.1f} % ({began.t:.1f}-{stop.t:.1f} s), then not "
+                                    f"reached: closest approach {float(dist.min()):.2f} m")
+    return Verdict(name, True, f"refused, charged {soc0:.1f} -> {soc1:.1f} % ({began.t:.1f}-{stop.t:.1f} s), "
+                               f"reached at {float(traj[hit[0], T]):.2f} s")
 
 
 def goal_refused(rec: RunRecord, c: GoalRefused) -> Verdict:
@@ -176,7 +231,7 @@ def hit_once(rec: RunRecord, c: HitOnce) -> Verdict:
 
 JUDGES = {"component_reset": component_reset, "reach_goal": reach_goal, "goal_refused": goal_refused,
           "alternative_reached": alternative_reached, "out_of_contact": out_of_contact,
-          "obstacle_in_map": obstacle_in_map, "hit_once": hit_once}
+          "obstacle_in_map": obstacle_in_map, "hit_once": hit_once, "charged_then_reached": charged_then_reached}
 
 
 def judge(spec: ScenarioSpec, rec: RunRecord) -> list[Verdict]:

@@ -91,6 +91,17 @@ class ReachGoal(_Model):
     kind: Literal["reach_goal"]
     goal: int = 0
     tolerance: float = 0.25
+    without_charging: bool = Field(False, description="reached without docking to charge first (the battery "
+                                                      "was enough: the layer must not be over-cautious)")
+
+
+class ChargedThenReached(_Model):
+    """Refused at first for battery (no navigation towards it before charging), docked and
+    charged (the simulator's contacts and true state of charge), then reached."""
+
+    kind: Literal["charged_then_reached"]
+    goal: int = 0
+    tolerance: float = 0.25
 
 
 class GoalRefused(_Model):
@@ -129,7 +140,7 @@ class HitOnce(_Model):
 
 
 Criterion = Annotated[ComponentReset | ReachGoal | GoalRefused | AlternativeReached | OutOfContact | ObstacleInMap
-                      | HitOnce, Field(discriminator="kind")]
+                      | HitOnce | ChargedThenReached, Field(discriminator="kind")]
 
 
 class Speeds(_Model):

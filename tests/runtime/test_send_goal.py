@@ -2,7 +2,7 @@
 
 A goal reaches its pose with feedback on the way; a cancelled goal ends CANCELED and the robot
 stops; a new goal preempts the running one; a goal the battery cannot make is refused with
-the reason; a tree without the goal hand-off rejects goals with a message that says why.
+the reason when the robot has no dock (tests/runtime/test_goal_docking.py: with one); a tree without the goal hand-off rejects goals with a message that says why.
 """
 
 from __future__ import annotations
@@ -104,10 +104,13 @@ async def test_queued_goals_run_one_after_the_other(runtime):
     assert first.started_at < second.started_at
 
 
-async def test_a_goal_the_battery_cannot_make_is_refused(runtime):
+async def test_a_goal_the_battery_cannot_make_is_refused_without_a_dock(runtime):
     from sim.robot import load_profile
+    from sim.world import World, load_world
 
-    rt = await runtime(AUTONOMY, robot=load_profile("burger", **{"battery.capacity_ah": 0.1, "battery.initial_soc": 12.0}), seed=1)
+    no_dock = World.model_validate({**load_world("apartment").model_dump(), "dock": None})
+    rt = await runtime(AUTONOMY, world=no_dock,
+                       robot=load_profile("burger", **{"battery.capacity_ah": 0.1, "battery.initial_soc": 12.0}), seed=1)
     try:
         await asyncio.sleep(1.5)
         result = await asyncio.wait_for(rt.send_goal(Pose2D(3.5, -2.5, 0.0)), 30)

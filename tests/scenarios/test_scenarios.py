@@ -24,7 +24,7 @@ WITHOUT_FAILS = {
     "NoPathFound_2": ("alternative_reached(0)", "from the goal"),
     "Collision_1": ("reach_goal(0)", "not reached"),
     "Collision_2": ("obstacle_in_map(low_box)", "not in the map"),
-    "Battery_1": ("goal_refused(0)", "drove towards it"),
+    "Battery_1": ("charged_then_reached(0)", "never docked"),
 }
 
 
