@@ -193,7 +193,14 @@ class SafetyZones:
 
     def on_scan(self, scan: LaserScan) -> None:
         """Turn the scan's valid readings (range_min <= r <= range_max; NaN and inf never are)
-        into base-frame points, and count the points inside every static zone."""
+        into base-frame points, and count the points inside every static zone. A scan that
+        cannot be read is logged and dropped (the last good one goes stale and stops the robot)."""
+        try:
+            self._take_scan(scan)
+        except Exception as exc:
+            log.error("safety_zones_scan_dropped", error=repr(exc))
+
+    def _take_scan(self, scan: LaserScan) -> None:
         r = np.asarray(scan.ranges, dtype=float)
         n = len(r)
         key = (scan.angle_min, scan.angle_increment, n)
@@ -217,15 +224,25 @@ class SafetyZones:
 
     # -- the filter --------------------------------------------------------------------------------
     def scan_valid(self, now: float) -> bool:
+        """A scan has arrived and is at most ``source_timeout`` old; with a timeout of 0 the
+        source is never invalid, not even before its first scan (as collision_monitor)."""
+        if self.source_timeout == 0.0:
+            return True
         scan = self._scan
-        if scan is None:
-            return False
-        return self.source_timeout == 0.0 or now - scan.stamp <= self.source_timeout
+        return scan is not None and now - scan.stamp <= self.source_timeout
 
     def filter(self, twist: Twist, now: float, source: str = "") -> Twist:
-        """The command the zones allow (``twist`` itself when none acts); records the state."""
+        """The command the zones allow (``twist`` itself when none acts); records the state.
+        An error inside stops the robot (logged) rather than the gate."""
         if not self.enabled:
             return twist
+        try:
+            return self._filter(twist, now, source)
+        except Exception as exc:
+            log.error("safety_zones_failed", error=repr(exc), sim_time=round(now, 3))
+            return ZERO_TWIST
+
+    def _filter(self, twist: Twist, now: float, source: str) -> Twist:
         self.evaluations += 1
         action, zone, points, out = "none", "", 0, twist
         if self.use_scan and not self.scan_valid(now):

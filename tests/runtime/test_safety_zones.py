@@ -155,6 +155,7 @@ def test_a_stale_or_missing_scan_stops_the_robot_as_an_invalid_source():
     assert zones.filter(Twist(0.1, 0.0), 1.6) == Twist(0.0, 0.0)
     assert (zones.state.action, zones.state.zone) == ("stop", INVALID_SOURCE)
     never = monitor({"Stop": STOP_BOX}, source_timeout=0.0)
+    assert never.filter(Twist(0.1, 0.0), 0.0) == Twist(0.1, 0.0)  # timeout 0: not even before a scan
     never.on_scan(scan(stamp=1.0))
     assert never.filter(Twist(0.1, 0.0), 100.0) == Twist(0.1, 0.0)
 
@@ -221,3 +222,11 @@ def test_default_zones_are_sized_from_the_robot_and_keep_it_off_a_wall():
     assert zones.filter(Twist(0.2, 0.0), 0.1) == Twist(0.0, 0.0)
     assert zones.filter(Twist(-0.2, 0.0), 0.1).linear < 0.0  # backing away stays allowed
     assert zones.filter(Twist(0.0, 1.0), 0.1).angular > 0.0  # and so does turning on the spot
+
+
+def test_a_scan_that_cannot_be_read_is_dropped_and_goes_stale():
+    zones = monitor({"Stop": STOP_BOX}, source_timeout=0.5)
+    zones.on_scan(scan(stamp=0.0))
+    zones.on_scan(LaserScan(0.3, 0.0, INC, 0.05, 10.0, np.array(["not", "ranges"])))  # logged, not raised
+    assert zones.filter(Twist(0.1, 0.0), 0.4) == Twist(0.1, 0.0)  # the last good scan still counts
+    assert zones.filter(Twist(0.1, 0.0), 0.6) == Twist(0.0, 0.0)  # until it is stale
