@@ -12,12 +12,16 @@ drift affects them alike:
   both         --record DIR --foxglove 0
 
 Prints per configuration the median CPU (user+sys of the process) and wall time over rounds,
-the CPU ratio to the baseline of the same round (median, min-max), the writer thread's own CPU,
-the messages written and dropped. A second part runs --realtime pairs (baseline, record) and
-prints the tick lateness p50/p99 of each, to show recording does not delay ticks. A third part
-(--inprocess) measures the run phase alone, in one process: CPU (all threads) from
-``runtime.start()`` to the bag closed, baseline and record interleaved, so start-up (imports)
-is left out: the steady-state cost per robot second.
+the CPU ratio to the baseline of the same round (median, min-max) and the ratio of the minima
+(the run is deterministic, so the least CPU a configuration took is its cost with the least
+interference from other processes), the writer thread's own CPU, the messages written and
+dropped, and the load average before and after. A second part runs --realtime pairs (baseline,
+record) and prints the tick lateness p50/p99 of each, to show recording does not delay ticks.
+A third part (--inprocess) measures the run phase alone, in one process: CPU (all threads)
+from the recording's start to its stop, baseline, record, live view without a client and live
+view with a client (a Foxglove WebSocket client in another process, subscribed to every
+channel before the run starts), so start-up (imports) is left out: the steady-state cost per
+robot second.
 
 Run: python bench/recording.py [--duration 40] [--rounds 3] [--realtime-seconds 15] [--inprocess]
 """
@@ -63,8 +67,42 @@ def run_once(extra: list[str], duration: float, realtime: bool = False) -> dict:
             "lateness_p50_us": data.get("lateness_p50_ms", 0.0) * 1e3, "sim_time": data.get("sim_time", 0.0)}
 
 
-def inprocess(duration: float, rounds: int) -> None:
+def client(url: str) -> None:
+    """A Foxglove WebSocket client in its own process: subscribes to every advertised channel,
+    prints 'ready', and reads (and drops) messages until the server goes away."""
+    import json
+
+    from websockets.sync.client import connect
+
+    with connect(url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"], max_size=None) as ws:
+        subscribed = 0
+        ready = False
+        try:
+            while True:
+                frame = ws.recv(timeout=None if ready else 5)
+                if isinstance(frame, str):
+                    msg = json.loads(frame)
+                    if msg.get("op") == "advertise":
+                        subs = [{"id": subscribed + i + 1, "channelId": ch["id"]} for i, ch in enumerate(msg["channels"])]
+                        subscribed += len(subs)
+                        ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
+        except TimeoutError:
+            print(f"ready {subscribed}", flush=True)  # no more advertisements: everything is subscribed
+            ready = True
+            for _frame in ws:
+                pass
+        except Exception:
+            pass
+
+
+IN_PROCESS = ("baseline", "record", "foxglove", "foxglove+client")
+
+
+def inprocess(duration: float, rounds: int, configs: tuple[str, ...] = IN_PROCESS) -> None:
+    """The run phase alone, in this process: CPU of all threads (process_time) from the recording's
+    start to its stop, so the interpreter's start-up and imports are left out."""
     import asyncio
+    import os
     import shutil
 
     from bt_runtime.cli.registration import registrations
@@ -79,7 +117,7 @@ def inprocess(duration: float, rounds: int) -> None:
     quiet_logging("error")
     regs = registrations(argparse.Namespace(register=[], no_nodes=False))
 
-    async def one(record: bool, folder: Path) -> tuple[float, int]:
+    async def one(config: str, folder: Path) -> tuple[float, int]:
         driver = SimDriver("apartment", "burger", seed=0)
         rt = AutonomyRuntime(driver, register=regs)
         rt.load_tree(ROOT / "trees" / "autonomy.xml")
@@ -87,33 +125,49 @@ def inprocess(duration: float, rounds: int) -> None:
         bb = rt.tree.root_blackboard
         bb.set("goal", Pose2D(g.x, g.y, 0.0))
         bb.set("goal_status", "PENDING")
-        rec = Recording(bag=folder) if record else None
+        rec = {"baseline": None, "record": Recording(bag=folder)}.get(config, Recording(foxglove_port=0))
+        viewer = None
         c0 = time.process_time()
         if rec is not None:
             rec.start(rt, recording_hooks(driver))
+        if config == "foxglove+client":
+            viewer = subprocess.Popen([sys.executable, __file__, "--client", rec.live.url], stdout=subprocess.PIPE,
+                                      text=True)
+            if not viewer.stdout.readline().startswith("ready"):
+                raise RuntimeError("the Foxglove client did not subscribe")
         await rt.start()
         await asyncio.sleep(duration)
         await rt.stop()
         report = rec.stop() if rec is not None else {}
-        return time.process_time() - c0, report.get("message_count", 0)
+        cpu = time.process_time() - c0
+        if viewer is not None:
+            viewer.wait(30)
+        return cpu, report.get("message_count", 0)
 
-    rows: dict[str, list[float]] = {"baseline": [], "record": []}
-    n = 0
+    rows: dict[str, list[float]] = {name: [] for name in configs}
+    messages: dict[str, int] = {}
+    load0 = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
-        run_loop(one(True, Path(tmp) / "warm"), virtual=True)  # imports and serializer code generation
+        run_loop(one("record", Path(tmp) / "warm"), virtual=True)  # imports and serializer code generation
         for r in range(rounds):
-            for name in rows:
+            for name in configs:
                 folder = Path(tmp) / f"{name}{r}"
-                cpu, msgs = run_loop(one(name == "record", folder), virtual=True)
+                cpu, msgs = run_loop(one(name, folder), virtual=True)
                 rows[name].append(cpu)
-                n = max(n, msgs)
+                messages[name] = max(messages.get(name, 0), msgs)
                 shutil.rmtree(folder, ignore_errors=True)
-    base, rec = statistics.median(rows["baseline"]), statistics.median(rows["record"])
-    ratios = [b2 / b1 - 1 for b1, b2 in zip(rows["baseline"], rows["record"])]
-    print(f"\nrun phase only (in process, {duration:g} s robot time, {rounds} rounds): CPU baseline {base:.3f} s, "
-          f"record {rec:.3f} s: {statistics.median(ratios):+.1%} ({min(ratios):+.1%}..{max(ratios):+.1%}); "
-          f"{n} messages, {(rec - base) / max(n, 1) * 1e6:.0f} us CPU a message; "
-          f"{base / duration * 1e3:.1f} vs {rec / duration * 1e3:.1f} ms CPU per robot second")
+    load1 = os.getloadavg()
+    print(f"\nrun phase only (in process, {duration:g} s robot time, {rounds} interleaved rounds; load average "
+          f"{load0[0]:.1f} -> {load1[0]:.1f}): CPU ms per robot second, min and median over rounds, and the "
+          f"per-round ratio to the baseline (median, min..max)")
+    base = rows[configs[0]]
+    for name in configs:
+        values = rows[name]
+        ratios = [x / b - 1 for x, b in zip(values, base)]
+        rel = (f"min {min(values) / min(base) - 1:+6.1%}  median {statistics.median(ratios):+6.1%} "
+               f"({min(ratios):+.1%}..{max(ratios):+.1%})") if name != configs[0] else ""
+        print(f"  {name:<16} {min(values) / duration * 1e3:6.2f} / {statistics.median(values) / duration * 1e3:6.2f} "
+              f"ms  {rel}  {messages[name]} messages")
 
 
 def main() -> None:
@@ -124,21 +178,30 @@ def main() -> None:
     ap.add_argument("--realtime-seconds", type=float, default=15.0, help="0: skip the real-time part")
     ap.add_argument("--inprocess", action="store_true", help="also measure the run phase alone, in process")
     ap.add_argument("--skip-processes", action="store_true", help="only the in-process part")
+    ap.add_argument("--client", metavar="URL", help=argparse.SUPPRESS)  # the subscribing viewer's process
     args = ap.parse_args()
+    if args.client:
+        client(args.client)
+        return
     if args.inprocess:
         inprocess(args.duration, args.rounds)
     if args.skip_processes:
         return
+    import os
+
     names = [n for n in args.configs.split(",") if n]
     results: dict[str, list[dict]] = {n: [] for n in names}
+    load0 = os.getloadavg()
     for r in range(args.rounds):
         for name in names:
             results[name].append(run_once(CONFIGS[name], args.duration))
         print(f"round {r + 1}/{args.rounds}: " + "  ".join(
             f"{n} {results[n][-1]['cpu']:.2f}s" for n in names), file=sys.stderr, flush=True)
-    print(f"\nrun: trees/autonomy.xml to yard_east, {args.duration:g} s robot time (virtual), "
-          f"{args.rounds} interleaved rounds; medians")
-    print(f"{'config':<10} {'CPU s':>7} {'wall s':>7} {'CPU vs base':>22} {'writer CPU s':>13} "
+    load1 = os.getloadavg()
+    print(f"\nwhole runs: trees/autonomy.xml to yard_east, {args.duration:g} s robot time (virtual), "
+          f"{args.rounds} interleaved rounds, load average {load0[0]:.1f} -> {load1[0]:.1f}; medians, and the "
+          f"CPU ratio to the baseline of the same round (median, min..max) and of the minima")
+    print(f"{'config':<10} {'CPU s':>7} {'wall s':>7} {'CPU vs base':>34} {'writer CPU s':>13} "
           f"{'messages':>9} {'dropped':>8}")
     base = results.get("baseline")
     for name in names:
@@ -147,10 +210,11 @@ def main() -> None:
         wall = statistics.median(x["wall"] for x in rows)
         if base and name != "baseline":
             ratios = [x["cpu"] / b["cpu"] - 1 for x, b in zip(rows, base)]
-            rel = f"{statistics.median(ratios):+.1%} ({min(ratios):+.1%}..{max(ratios):+.1%})"
+            low = min(x["cpu"] for x in rows) / min(b["cpu"] for b in base) - 1
+            rel = f"{statistics.median(ratios):+.1%} ({min(ratios):+.1%}..{max(ratios):+.1%}) min {low:+.1%}"
         else:
             rel = "-"
-        print(f"{name:<10} {cpu:7.2f} {wall:7.2f} {rel:>22} {statistics.median(x['writer_cpu'] for x in rows):13.3f} "
+        print(f"{name:<10} {cpu:7.2f} {wall:7.2f} {rel:>34} {statistics.median(x['writer_cpu'] for x in rows):13.3f} "
               f"{statistics.median(x['messages'] for x in rows):9.0f} {max(x['dropped'] for x in rows):8d}")
     if args.realtime_seconds > 0:
         print(f"\nreal time, {args.realtime_seconds:g} s: tick lateness p99 (us)")

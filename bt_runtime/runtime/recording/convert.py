@@ -333,3 +333,13 @@ CONVERTERS: dict[str, Callable[[ConvertState, str, float, Any], Output]] = {
     "diagnostics": diagnostics, "supervisor_event": supervisor_event, "gate_event": gate_event,
     "odometry": odometry_like, "event": event,
 }
+
+# the type each kind is written as ("odom" also writes tf2_msgs/msg/TFMessage on the tf topic)
+KIND_TYPES: dict[str, str] = {
+    "scan": "sensor_msgs/msg/LaserScan", "odom": "nav_msgs/msg/Odometry", "pose": "tf2_msgs/msg/TFMessage",
+    "imu": "sensor_msgs/msg/Imu", "battery": "sensor_msgs/msg/BatteryState", "plan": "nav_msgs/msg/Path",
+    "map": "nav_msgs/msg/OccupancyGrid", "tf_static": "tf2_msgs/msg/TFMessage", "command": "geometry_msgs/msg/Twist",
+    "tree_log": "nav2_msgs/msg/BehaviorTreeLog", "diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    "supervisor_event": "rcl_interfaces/msg/Log", "gate_event": "rcl_interfaces/msg/Log",
+    "odometry": "nav_msgs/msg/Odometry", "event": "rcl_interfaces/msg/Log",
+}

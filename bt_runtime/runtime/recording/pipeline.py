@@ -128,6 +128,10 @@ class RecordPipeline:
     def _write_one(self, kind: str, topic: str, t: float, payload: Any) -> None:
         bag = self.bag
         try:
+            if kind == "advertise":  # a channel made before its first message (payload: its type)
+                if topic not in self.channels.channels:
+                    self._add_channel(topic, payload)
+                return
             if bag is None:
                 if kind in SKIPPABLE and self._unwatched(topic):
                     return  # live view only: nothing to convert for a topic nobody watches
@@ -141,8 +145,7 @@ class RecordPipeline:
             for name, typename, msg in CONVERTERS[kind](self.state, topic, t, payload):
                 logger = loggers.get(name)
                 if logger is None:
-                    latched = name in self.latched_topics or typename in LATCHED_TYPES
-                    self.channels.add(name, typename, latched=latched)
+                    self._add_channel(name, typename)
                     logger = loggers[name]
                 if bag is None and self._unwatched(name):
                     continue  # live view only, and nobody subscribed to this topic
@@ -157,6 +160,10 @@ class RecordPipeline:
             self.errors += 1
             if self.errors <= 5:
                 log.error("recording_message_failed", kind=kind, topic=topic, error=repr(exc))
+
+    def _add_channel(self, topic: str, typename: str) -> None:
+        latched = topic in self.latched_topics or typename in LATCHED_TYPES
+        self.channels.add(topic, typename, latched=latched)
 
     def _unwatched(self, topic: str) -> bool:
         """Live view only: a topic with a channel, no subscriber, and nothing to keep for later ones."""

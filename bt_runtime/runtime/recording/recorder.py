@@ -20,6 +20,7 @@ import structlog
 
 from ..twist_mux import INPUT_STREAM
 from .config import RecordingOptions
+from .convert import KIND_TYPES
 from .hooks import RecordingHooks
 from .pipeline import RecordPipeline
 from .tree_log import tree_log
@@ -57,6 +58,9 @@ class Recorder:
     def attach(self) -> None:
         """Subscribe to everything; call after ``load_tree`` and before ``runtime.start()``."""
         rt, topics, put, clock = self.runtime, self.options.topics, self.pipeline.put, self.clock
+        if getattr(self.pipeline, "live", None) is not None:  # a live view: advertise every topic
+            for topic, typename in self.topics().items():  # first in the queue: before any message
+                put("advertise", topic, 0.0, typename)
         for stream, kind, field_name in SENSOR_STREAMS:
             topic = getattr(topics, field_name)
             if topic:
@@ -85,6 +89,25 @@ class Recorder:
         self._check_map()
         self._task = asyncio.get_running_loop().create_task(self._periodic(), name="recording")
         self.attached = True
+
+    def topics(self) -> dict[str, str]:
+        """Every topic this recording may write, with its type (the live view advertises them at
+        start, so a client can subscribe before the first message of each)."""
+        t, rt = self.options.topics, self.runtime
+        found = {getattr(t, field_name): KIND_TYPES[kind] for _s, kind, field_name in SENSOR_STREAMS}
+        found[t.tf] = KIND_TYPES["tf_static"]
+        sources = ["navigation", *GATE_SOURCE_TOPIC.values(), *rt.gate.mux.inputs]
+        found.update({self._source_topic(name): KIND_TYPES["command"] for name in sources})
+        found.update({t.cmd_vel: KIND_TYPES["command"], t.supervisor_events: KIND_TYPES["supervisor_event"],
+                      t.gate_events: KIND_TYPES["gate_event"], t.diagnostics: KIND_TYPES["diagnostics"],
+                      t.tf_static: KIND_TYPES["tf_static"]})
+        if rt.tree is not None:
+            found[t.behavior_tree_log] = KIND_TYPES["tree_log"]
+        if self.hooks.map_source is not None:
+            found[t.map] = KIND_TYPES["map"]
+        found.update({spec.topic: KIND_TYPES[spec.kind] for spec in self.hooks.streams})
+        found.pop("", None)  # topics configured off
+        return found
 
     def _subscribe(self, stream: str, kind: str, topic: str, select: Callable[[Any], bool] | None = None,
                    source: Callable[[str, Callable[[Any], None]], Callable[[], None]] | None = None) -> None:

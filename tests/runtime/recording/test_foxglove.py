@@ -99,3 +99,37 @@ def test_client_receives_cmd_vel_and_tree_log(tmp_path):
     assert hasattr(twist.linear, "x") and hasattr(twist.angular, "z")
     log = store.deserialize_cdr(got["/behavior_tree_log"][0], WANTED["/behavior_tree_log"])
     assert log.event_log and log.event_log[0].current_status in ("IDLE", "RUNNING", "SUCCESS", "FAILURE")
+
+
+def test_every_topic_is_advertised_before_its_first_message():
+    """A live client sees every topic at once (and may subscribe before the first message of each)."""
+    from websockets.sync.client import connect
+
+    from bt_runtime.runtime.app import AutonomyRuntime
+    from bt_runtime.runtime.recording.cli import Recording
+    from sim.driver import SimDriver
+    from sim.recording import recording_hooks
+
+    async def main() -> tuple[dict, dict]:
+        driver = SimDriver("apartment", "burger", seed=1)
+        runtime = AutonomyRuntime(driver)
+        runtime.load_tree('<root BTCPP_format="4"><BehaviorTree ID="Main"><AlwaysSuccess/></BehaviorTree></root>')
+        recording = Recording(foxglove_port=0).start(runtime, recording_hooks(driver))
+        expected = recording.recorder.topics()
+        advertised: dict[str, str] = {}
+        try:  # the runtime is not started: nothing is published, only advertised
+            with connect(recording.live.url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]) as ws:
+                deadline = time.monotonic() + 30
+                while not set(expected) <= set(advertised) and time.monotonic() < deadline:
+                    frame = ws.recv(timeout=30)
+                    msg = json.loads(frame) if isinstance(frame, str) else {}
+                    if msg.get("op") == "advertise":
+                        advertised.update({ch["topic"]: ch["schemaName"] for ch in msg["channels"]})
+        finally:
+            recording.stop()
+        return expected, advertised
+
+    expected, advertised = asyncio.run(main())
+    assert {"/scan", "/odom", "/tf", "/cmd_vel", "/cmd_vel/teleop", "/behavior_tree_log", "/sim/ground_truth",
+            "/map"} <= set(expected)
+    assert advertised == expected
