@@ -11,7 +11,7 @@ import asyncio
 from typing import Any
 
 from ..runtime.messages import Pose2D
-from .summary import ABORTED, FROM_TREE_STATUS, NOT_FINISHED, SUCCEEDED, GoalOutcome
+from .summary import ABORTED, FROM_TREE_STATUS, NOT_FINISHED, NOT_STARTED, SUCCEEDED, GoalOutcome
 
 
 def uses_goal_handoff(tree: Any) -> bool:
@@ -100,5 +100,5 @@ def mark_unfinished(outcomes: list[GoalOutcome], runtime: Any, witness: Any, dur
             out.reason = f"{limit} ended {out.ended_at - out.sent_at:.1f} s after the goal was handed over"
             why = witness.to_dict(since=out.sent_at)
             out.failing_node, out.navigation_error = why["failing_node"], why["navigation_error"]
-        elif out.sent_at is None:
+        elif out.sent_at is None and out.outcome == NOT_STARTED:  # (a REJECTED goal keeps its reason)
             out.reason = "the run ended before this goal was handed over"

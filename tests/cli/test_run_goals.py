@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from bt_runtime.cli.run_goals import outcomes_for, send_goals
+from bt_runtime.cli.run_goals import mark_unfinished, outcomes_for, send_goals
 from bt_runtime.cli.summary import EXIT_FAILED, verdict
 from bt_runtime.runtime.explain import FailureWitness
 from bt_runtime.runtime.messages import Pose2D
@@ -39,6 +39,8 @@ async def test_cli_goals_are_queued_in_the_intake_and_a_client_goal_preempts_the
     assert outcomes[0].reason.startswith("preempted by a newer goal")
     assert outcomes[0].sent_at is not None and outcomes[0].ended_at > outcomes[0].sent_at
     assert outcomes[1].sent_at is None  # never handed over
+    mark_unfinished(outcomes, rt, witness, None)  # the run ends: the outcomes keep their reasons
+    assert outcomes[1].reason.startswith("preempted by a newer goal")
     assert client_result.succeeded, client_result
 
 
