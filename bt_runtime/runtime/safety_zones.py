@@ -69,16 +69,15 @@ NO_ACTION = ZoneState(-math.inf)
 class Shape:
     """A polygon or circle in the base frame, tested against many points at once."""
 
-    def __init__(self, zone: ZoneConfig):
-        if zone.shape_kind() == "circle":
-            radius = zone.radius if zone.type == "circle" else zone.footprint_radius
+    def __init__(self, *, radius: float | None = None, vertices=None):
+        if vertices is None:
             if radius is None:
                 raise ValueError("an approach polygon without points needs the robot's footprint radius")
             self.radius = float(radius)
             self.vertices = None
             self.reach = self.radius
         else:
-            v = np.asarray(zone.vertices, dtype=float)
+            v = np.asarray(vertices, dtype=float)
             self.radius = math.nan
             self.vertices = v
             xi, yi = v[:, 0], v[:, 1]
@@ -100,13 +99,27 @@ class Shape:
         return (np.count_nonzero(hits, axis=-1) & 1).astype(bool)
 
 
+def shape_of(zone: ZoneConfig) -> Shape | None:
+    """The zone's fixed shape (None for a velocity polygon: its shape follows the command)."""
+    kind = zone.shape_kind()
+    if kind == "circle":
+        return Shape(radius=zone.radius if zone.type == "circle" else zone.footprint_radius)
+    if kind == "polygon":
+        return Shape(vertices=zone.vertices)
+    return None
+
+
 class Zone:
     """One configured zone: its shape, action and parameters."""
 
     def __init__(self, name: str, cfg: ZoneConfig, sees_scan: bool = True):
         self.name = name
         self.cfg = cfg
-        self.shape = Shape(cfg)
+        self.shape = shape_of(cfg)
+        # velocity_polygon: (sub-polygon, its shape) in order, and the one the last command chose
+        self.subs = [(cfg.sub_polygons[n], Shape(vertices=cfg.sub_polygons[n].points))
+                     for n in cfg.velocity_polygons or ()]
+        self.current: int | None = None
         self.action = cfg.action_type
         self.enabled = cfg.enabled and sees_scan  # a zone given no source never triggers
         self.min_points = cfg.effective_min_points
@@ -115,6 +128,24 @@ class Zone:
 
     def count(self, x: np.ndarray, y: np.ndarray) -> int:
         return int(np.count_nonzero(self.shape.inside(x, y)))
+
+    def counts(self, x: np.ndarray, y: np.ndarray) -> list[int]:
+        """Points inside the shape, or inside each sub-polygon of a velocity polygon."""
+        if self.shape is not None:
+            return [self.count(x, y)]
+        return [int(np.count_nonzero(shape.inside(x, y))) for _, shape in self.subs]
+
+    def select(self, twist: Twist) -> int | None:
+        """The index into ``counts`` for this command: 0 for a fixed shape; for a velocity
+        polygon the first sub-polygon covering the command, else the one chosen last (None
+        before any was: the zone has no shape yet), as collision_monitor keeps it."""
+        if self.shape is not None:
+            return 0
+        for k, (sub, _) in enumerate(self.subs):
+            if sub.covers(twist.linear, twist.angular, self.cfg.holonomic):
+                self.current = k
+                break
+        return self.current
 
     def collision_time(self, x: np.ndarray, y: np.ndarray, v: float, w: float) -> float:
         """Seconds before the footprint takes in ``min_points`` points when driving (v, w), or
@@ -168,7 +199,7 @@ class SafetyZones:
         self.mount = lidar_mount
         self._scan: LaserScan | None = None
         self._x = self._y = np.zeros(0)
-        self._counts: dict[str, int] = {}
+        self._counts: dict[str, list[int]] = {}
         self._trig: dict[tuple[str, float, float], float] = {}
         self._trig_key: int = 0
         self._cos_sin: tuple[tuple[float, float, int], np.ndarray, np.ndarray] | None = None
@@ -218,7 +249,7 @@ class SafetyZones:
         self._y = my + rv * sin_a[ok]
         self._scan = scan
         self._trig.clear()
-        self._counts = {z.name: z.count(self._x, self._y) for z in self.zones
+        self._counts = {z.name: z.counts(self._x, self._y) for z in self.zones
                         if z.enabled and z.action != "approach"}
         self.scans += 1
 
@@ -262,7 +293,9 @@ class SafetyZones:
                     if _smaller(safe, out):
                         action, zone, points, out = "approach", z.name, inside, safe
                     continue
-                count = self._counts.get(z.name, 0) if self.use_scan else 0
+                index = z.select(twist)
+                counts = self._counts.get(z.name)
+                count = counts[index] if counts and index is not None and self.use_scan else 0
                 if count < z.min_points or z.action == "none":
                     continue
                 if z.action == "stop":

@@ -77,10 +77,40 @@ def parse_points(value: Any) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
+class SubPolygonConfig(_Model):
+    """One entry of a velocity polygon's ``velocity_polygons``: its shape and the commands it is
+    for (all bounds inclusive; required, as in collision_monitor)."""
+
+    points: tuple[tuple[float, float], ...]
+    linear_min: float = Field(description="m/s (holonomic: the speed's magnitude)")
+    linear_max: float
+    theta_min: float = Field(description="rad/s")
+    theta_max: float
+    direction_start_angle: float = Field(-math.pi, description="holonomic only: rad")
+    direction_end_angle: float = Field(math.pi, description="holonomic only: rad")
+
+    @field_validator("points", mode="before")
+    @classmethod
+    def _points(cls, value: Any) -> Any:
+        return parse_points(value)
+
+    def covers(self, v: float, w: float, holonomic: bool) -> bool:
+        """Is the command (v forward, w) within this sub-polygon's ranges?"""
+        if not self.theta_min <= w <= self.theta_max:
+            return False
+        if not holonomic:
+            return self.linear_min <= v <= self.linear_max
+        speed, direction = abs(v), (0.0 if v >= 0.0 else math.pi)  # a differential base: y = 0
+        if not self.linear_min <= speed <= self.linear_max:
+            return False
+        lo, hi = self.direction_start_angle, self.direction_end_angle
+        return lo <= direction <= hi if lo <= hi else (direction >= lo or direction <= hi)
+
+
 class ZoneConfig(_Model):
     """One entry of ``polygons`` (collision_monitor's parameter names and defaults)."""
 
-    type: Literal["polygon", "circle"]
+    type: Literal["polygon", "circle", "velocity_polygon"]
     action_type: Literal["stop", "slowdown", "limit", "approach", "none"]
     points: tuple[tuple[float, float], ...] | None = Field(None, description="polygon: [[x, y], ...], base frame")
     radius: float | None = Field(None, gt=0, description="circle: metres around the base frame's origin")
@@ -97,6 +127,10 @@ class ZoneConfig(_Model):
     release_consecutive_points: int = Field(1, ge=1, le=1, description="debouncing is not supported")
     footprint_radius: float | None = Field(None, gt=0, description="approach without points: the robot's "
                                                                    "radius (set by the loader)")
+    velocity_polygons: list[str] | None = Field(None, description="velocity_polygon: its sub-polygons, "
+                                                                  "the first covering the command is used")
+    holonomic: bool = False
+    sub_polygons: dict[str, SubPolygonConfig] = Field(default_factory=dict, description="set by the loader")
 
     @field_validator("points", mode="before")
     @classmethod
@@ -109,6 +143,14 @@ class ZoneConfig(_Model):
             raise ValueError("a circle needs 'radius'")
         if self.type == "polygon" and self.points is None and self.action_type != "approach":
             raise ValueError("a polygon needs 'points' (only an approach polygon may follow the footprint)")
+        if self.type == "velocity_polygon":
+            if not self.velocity_polygons:
+                raise ValueError("a velocity_polygon needs 'velocity_polygons' (a list of names)")
+            if self.action_type == "approach":
+                raise ValueError("an approach zone is the footprint: a velocity_polygon cannot be one here")
+            missing = [n for n in self.velocity_polygons if n not in self.sub_polygons]
+            if missing:
+                raise ValueError(f"velocity polygon(s) {', '.join(missing)} listed but not defined")
         if self.simulation_time_step > self.time_before_collision:
             raise ValueError("simulation_time_step must not exceed time_before_collision")
         return self
@@ -122,7 +164,10 @@ class ZoneConfig(_Model):
         return self.points
 
     def shape_kind(self) -> str:
-        """'circle' or 'polygon' as evaluated (an approach polygon without points: a circle)."""
+        """'circle', 'polygon' or 'velocity_polygon' as evaluated (an approach polygon without
+        points: a circle)."""
+        if self.type == "velocity_polygon":
+            return self.type
         return "circle" if self.type == "circle" or self.points is None else "polygon"
 
 
@@ -228,10 +273,13 @@ def from_parameters(params: dict[str, Any], origin: str = "<collision_monitor>")
 def _section(value: Any, origin: str, name: str, ignored: set[str], model: type[BaseModel]) -> BaseModel:
     if not isinstance(value, dict):
         raise SafetyZonesConfigError(f"{origin}: {name}: must be a mapping of parameters, got {value!r}")
-    if value.get("type") == "velocity_polygon":
-        raise SafetyZonesConfigError(f"{origin}: {name}.type: 'velocity_polygon' is not supported "
-                                     f"(polygon, circle)")
     kept = {k: v for k, v in value.items() if k not in ignored}
+    if value.get("type") == "velocity_polygon":  # its sub-polygons are sections of their own
+        subs = kept.get("velocity_polygons") or []
+        if isinstance(subs, list):
+            kept["sub_polygons"] = {sub: _section(kept.pop(sub), origin, f"{name}.{sub}", set(), SubPolygonConfig)
+                                    for sub in subs if isinstance(sub, str) and sub in kept}
+        kept = {k: v for k, v in kept.items() if not isinstance(v, dict) or k == "sub_polygons"}  # unlisted: unread
     try:
         return model.model_validate(kept)
     except ValidationError as exc:
@@ -302,6 +350,10 @@ def default_config(robot: RobotInfo) -> CollisionMonitorConfig:
     return from_parameters(params, "defaults")
 
 
+def _points_text(points) -> str:
+    return "[" + ", ".join(f"[{x:g}, {y:g}]" for x, y in points) + "]"
+
+
 def to_yaml(config: CollisionMonitorConfig) -> str:
     """The configuration as a collision_monitor parameter file."""
     params: dict[str, Any] = {"enabled": config.enabled, "source_timeout": config.source_timeout,
@@ -312,7 +364,12 @@ def to_yaml(config: CollisionMonitorConfig) -> str:
         if z.type == "circle":
             entry["radius"] = z.radius
         elif z.points is not None:
-            entry["points"] = "[" + ", ".join(f"[{x:g}, {y:g}]" for x, y in z.points) + "]"
+            entry["points"] = _points_text(z.points)
+        if z.type == "velocity_polygon":
+            entry.update(velocity_polygons=list(z.velocity_polygons or ()), holonomic=z.holonomic)
+            for sub_name in z.velocity_polygons or ():
+                sub = z.sub_polygons[sub_name]
+                entry[sub_name] = {"points": _points_text(sub.points), **sub.model_dump(exclude={"points"})}
         entry["min_points"] = z.effective_min_points
         if z.action_type == "slowdown":
             entry["slowdown_ratio"] = z.slowdown_ratio

@@ -230,3 +230,35 @@ def test_a_scan_that_cannot_be_read_is_dropped_and_goes_stale():
     zones.on_scan(LaserScan(0.3, 0.0, INC, 0.05, 10.0, np.array(["not", "ranges"])))  # logged, not raised
     assert zones.filter(Twist(0.1, 0.0), 0.4) == Twist(0.1, 0.0)  # the last good scan still counts
     assert zones.filter(Twist(0.1, 0.0), 0.6) == Twist(0.0, 0.0)  # until it is stale
+
+
+def test_a_velocity_polygon_uses_the_sub_polygon_of_the_command():
+    forward = {"points": "[[0.35, 0.3], [0.35, -0.3], [-0.2, -0.3], [-0.2, 0.3]]",
+               "linear_min": 0.0, "linear_max": 1.0, "theta_min": -1.0, "theta_max": 1.0}
+    backward = {"points": "[[0.2, 0.3], [0.2, -0.3], [-0.35, -0.3], [-0.35, 0.3]]",
+                "linear_min": -1.0, "linear_max": 0.0, "theta_min": -1.0, "theta_max": 1.0}
+    zones = monitor({"Vel": {"type": "velocity_polygon", "action_type": "stop", "min_points": 4,
+                             "velocity_polygons": ["forward", "backward"], "forward": forward,
+                             "backward": backward}})
+    zones.on_scan(scan(wall(0.3, 0.1)))  # inside the forward shape only
+    assert zones.filter(Twist(-0.2, 0.0), 0.1) == Twist(-0.2, 0.0)  # backing away: the backward shape
+    assert zones.filter(Twist(0.2, 0.0), 0.1) == Twist(0.0, 0.0)
+    assert zones.state.zone == "Vel"
+    assert zones.filter(Twist(0.2, 3.0), 0.1) == Twist(0.0, 0.0)  # covered by none: the last shape stays
+    fresh = monitor({"Vel": {"type": "velocity_polygon", "action_type": "stop", "min_points": 4,
+                             "velocity_polygons": ["forward"], "forward": forward}})
+    fresh.on_scan(scan(wall(0.3, 0.1)))
+    assert fresh.filter(Twist(0.2, 3.0), 0.1) == Twist(0.2, 3.0)  # no shape chosen yet: not evaluated
+
+
+def test_a_holonomic_velocity_polygon_reads_speed_and_direction():
+    ahead = {"points": "[[0.4, 0.3], [0.4, -0.3], [0.0, -0.3], [0.0, 0.3]]", "linear_min": 0.0, "linear_max": 1.0,
+             "theta_min": -1.0, "theta_max": 1.0, "direction_start_angle": -0.5, "direction_end_angle": 0.5}
+    behind = {"points": "[[0.0, 0.3], [0.0, -0.3], [-0.4, -0.3], [-0.4, 0.3]]", "linear_min": 0.0,
+              "linear_max": 1.0, "theta_min": -1.0, "theta_max": 1.0, "direction_start_angle": 2.5,
+              "direction_end_angle": -2.5}  # wraps through pi
+    zones = monitor({"Vel": {"type": "velocity_polygon", "action_type": "stop", "holonomic": True,
+                             "velocity_polygons": ["ahead", "behind"], "ahead": ahead, "behind": behind}})
+    zones.on_scan(scan(wall(-0.3, 0.1)))
+    assert zones.filter(Twist(0.2, 0.0), 0.1) == Twist(0.2, 0.0)
+    assert zones.filter(Twist(-0.2, 0.0), 0.1) == Twist(0.0, 0.0)

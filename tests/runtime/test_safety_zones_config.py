@@ -96,7 +96,7 @@ def test_the_documented_example_and_the_defaults_round_trip(tmp_path):
      "polygon 'Missing' is listed in 'polygons' but not defined"),
     (("source_timeout: 0.5", "source_timout: 0.5"), "source_timout: unknown parameter"),
     (('observation_sources: ["scan"]', "observation_sources: scan"), "observation_sources: must be a list"),
-    (('type: "circle"', 'type: "velocity_polygon"'), "PolygonStop.type: 'velocity_polygon' is not supported"),
+    (('type: "circle"', 'type: "velocity_polygon"'), "PolygonStop: a velocity_polygon needs 'velocity_polygons'"),
 ])
 def test_bad_files_get_errors_naming_the_file_and_the_field(tmp_path, change, message):
     path = write(tmp_path, GOOD.replace(*change))
@@ -121,3 +121,54 @@ def test_points_accept_the_string_the_pairs_and_the_old_flat_list():
     assert parse_points([0.1, 0.1, 0.1, -0.1, -0.1, -0.1]) == square
     with pytest.raises(ValueError, match="not finite"):
         parse_points("[[0.1, .nan], [0.1, -0.1], [-0.1, -0.1]]")
+
+
+VELOCITY = """\
+collision_monitor:
+  ros__parameters:
+    polygons: ["VelocityPolygonStop"]
+    VelocityPolygonStop:
+      type: "velocity_polygon"
+      action_type: "stop"
+      min_points: 6
+      velocity_polygons: ["rotation", "translation_forward"]
+      holonomic: false
+      rotation:
+        points: "[[0.3, 0.3], [0.3, -0.3], [-0.3, -0.3], [-0.3, 0.3]]"
+        linear_min: 0.0
+        linear_max: 0.05
+        theta_min: -1.0
+        theta_max: 1.0
+      translation_forward:
+        points: "[[0.35, 0.3], [0.35, -0.3], [-0.2, -0.3], [-0.2, 0.3]]"
+        linear_min: 0.0
+        linear_max: 1.0
+        theta_min: -1.0
+        theta_max: 1.0
+    observation_sources: ["scan"]
+    scan: {type: "scan", topic: "scan"}
+"""
+
+
+def test_velocity_polygons_load_and_round_trip(tmp_path):
+    cfg = load_collision_monitor(write(tmp_path, VELOCITY))
+    zone = cfg.zones["VelocityPolygonStop"]
+    assert zone.velocity_polygons == ["rotation", "translation_forward"]
+    assert zone.sub_polygons["translation_forward"].points[0] == (0.35, 0.3)
+    path = tmp_path / "again.yaml"
+    path.write_text(to_yaml(cfg))
+    assert load_collision_monitor(path).zones == cfg.zones
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (("        linear_min: 0.0\n        linear_max: 0.05\n", "        linear_max: 0.05\n"),
+     "VelocityPolygonStop.rotation.linear_min: Field required"),
+    (('["rotation", "translation_forward"]', '["rotation", "backward"]'),
+     "velocity polygon(s) backward listed but not defined"),
+    (('action_type: "stop"', 'action_type: "approach"'), "a velocity_polygon cannot be one here"),
+])
+def test_bad_velocity_polygons_name_the_field(tmp_path, change, message):
+    path = write(tmp_path, VELOCITY.replace(*change))
+    with pytest.raises(SafetyZonesConfigError) as err:
+        load_collision_monitor(path)
+    assert str(path) in str(err.value) and message in str(err.value)
