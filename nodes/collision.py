@@ -141,7 +141,7 @@ class EstimateContactPoint(SyncActionNode):
             return FAILURE
         spread = min(abs(spread), math.pi) if math.isfinite(spread) else math.pi / 4
         radius = ctx.robot.radius
-        arc = ContactArc(pose.x, pose.y, wrap_angle(pose.yaw + bearing), spread, radius)
+        arc = ContactArc(pose.x, pose.y, wrap_angle(pose.yaw + bearing), spread, radius, pose.yaw)
         x, y = arc.point_at(arc.bearing, radius + self.get_input("offset"))
         self.set_output("arc", arc)
         self.set_output("point", Pose2D(x, y, 0.0))
@@ -258,14 +258,17 @@ class MarkObstacle(AsyncActionNode):
 
     With a contact ``arc`` the mark covers it: discs of ``radius`` just outside the body along
     the arc, extended ``margin`` m past each end (the chord plus a margin), so corner and
-    oblique hits are covered. A hit within ``merge_distance`` of an earlier mark grows that
-    mark. Without an arc, one disc at ``point``."""
+    oblique hits are covered; ``outward`` m further on the far side of a touch off to one side
+    of the front (the obstacle lies that way). A hit within ``merge_distance`` of an earlier
+    mark grows that mark. Without an arc, one disc at ``point``."""
 
     @classmethod
     def provided_ports(cls):
         return [input_port("point", POSE, "{contact_point}"), input_port("radius", float, 0.15, "m"),
                 input_port("arc", CONTACT_ARC, "{contact_arc}", "the sensed contact (EstimateContactPoint)"),
                 input_port("margin", float, 0.1, "m past each end of the arc"),
+                input_port("outward", float, 0.15, "m more past the end away from the heading when the "
+                                                    "touch was off to one side of the front"),
                 input_port("merge_distance", float, 0.3, "m: a hit this close to a mark grows it"),
                 output_port("mark", int, "{collision_mark}", "index of the mark made or grown")]
 
@@ -274,7 +277,7 @@ class MarkObstacle(AsyncActionNode):
         radius = self.get_input("radius")
         arc = self.get_input("arc", None)
         if isinstance(arc, ContactArc):
-            points = arc.chord(arc.radius + radius, self.get_input("margin"))
+            points = arc.chord(arc.radius + radius, self.get_input("margin"), self.get_input("outward"))
         else:
             point = self.get_input("point")
             points = [(point.x, point.y)]

@@ -20,29 +20,52 @@ from bt_runtime.runtime.messages import wrap_angle
 class ContactArc:
     """A sensed contact in the map frame: the robot's estimated centre (``x``, ``y``), the
     arc's middle ``bearing`` (map frame, rad) and ``half_width`` (rad), and the body
-    ``radius`` (m) where the touch was."""
+    ``radius`` (m) where the touch was; ``heading``, the robot's heading then (NaN: unknown)."""
 
     x: float
     y: float
     bearing: float
     half_width: float
     radius: float
+    heading: float = math.nan
 
     def point_at(self, bearing: float, reach: float) -> tuple[float, float]:
         return self.x + reach * math.cos(bearing), self.y + reach * math.sin(bearing)
 
-    def chord(self, reach: float, margin: float) -> list[tuple[float, float]]:
+    def outward_side(self) -> int:
+        """+1 / -1 when the arc lies on the robot's left / right front, clear of straight
+        ahead; 0 otherwise (straight ahead, behind, or heading unknown)."""
+        if not math.isfinite(self.heading):
+            return 0
+        rel = wrap_angle(self.bearing - self.heading)
+        if self.half_width < abs(rel) <= math.pi / 2 + 1e-9:
+            return 1 if rel > 0 else -1
+        return 0
+
+    def chord(self, reach: float, margin: float, outward: float = 0.0) -> list[tuple[float, float]]:
         """Points along the arc at distance ``reach`` from the robot's centre, extended by
-        ``margin`` metres beyond each end, no further apart than ``margin`` (or 5 cm)."""
-        extra = margin / max(reach, 1e-6)
-        span = 2 * (self.half_width + extra)
+        ``margin`` metres beyond each end, no further apart than ``margin`` (or 5 cm).
+
+        ``outward`` m more beyond the end away from the robot's heading when the touch was off
+        to one side of its front: an obstacle touched there lies on that side (had it reached
+        across the robot's path, the front would have touched it first), so the rest of a box
+        hit at its corner is covered and the re-plan passes on the free side."""
+        reach = max(reach, 1e-6)
+        lo = hi = margin / reach
+        side = self.outward_side()
+        if side > 0:
+            hi += outward / reach
+        elif side < 0:
+            lo += outward / reach
+        span = 2 * self.half_width + lo + hi
         spacing = max(min(margin, 0.1), 0.05)
         n = max(1, math.ceil(span * reach / spacing))
-        start = self.bearing - self.half_width - extra
+        start = self.bearing - self.half_width - lo
         return [self.point_at(start + span * i / n, reach) for i in range(n + 1)]
 
     def to_string(self) -> str:
-        return f"{self.x:g};{self.y:g};{self.bearing:g};{self.half_width:g};{self.radius:g}"
+        text = f"{self.x:g};{self.y:g};{self.bearing:g};{self.half_width:g};{self.radius:g}"
+        return text + (f";{self.heading:g}" if math.isfinite(self.heading) else "")
 
 
 def segments_arc(spans: tuple[tuple[float, float], ...], pressed: tuple[int, ...]) -> tuple[float, float] | None:

@@ -206,10 +206,10 @@ WAYPOINT_STATUSES = PortType(f"std::vector<{_WS_CPP}, std::allocator<{_WS_CPP}> 
 
 
 def parse_contact_arc(text: str) -> ContactArc:
-    """A contact arc literal: ``x;y;bearing;half_width;radius`` (``nodes.contact.ContactArc``)."""
+    """A contact arc literal: ``x;y;bearing;half_width;radius[;heading]`` (``nodes.contact.ContactArc``)."""
     parts = [float(p) for p in text.replace(",", ";").split(";") if p.strip()]
-    if len(parts) != 5:
-        raise ValueError(f"a contact arc is 'x;y;bearing;half_width;radius', got {text!r}")
+    if len(parts) not in (5, 6):
+        raise ValueError(f"a contact arc is 'x;y;bearing;half_width;radius[;heading]', got {text!r}")
     return ContactArc(*parts)
 
 

@@ -89,3 +89,19 @@ def test_marks_leave_open_the_corridor_the_box_leaves_open():
     start, goal = Pose2D(0.5, 0.7), Pose2D(3.5, 0.7)
     assert _marked_corridor(0.1, 0.05).plan(start, goal).ok
     assert not _marked_corridor(0.2, 0.1).plan(start, goal).ok
+
+
+def test_a_touch_off_to_one_side_is_marked_further_on_that_side():
+    """A waffle's front-left segment closed while heading east: the obstacle lies to the
+    left (had it reached across the path the front segment would have closed), so the mark
+    reaches `outward` further left, not to the right; a head-on touch stays symmetric."""
+    spans = load_profile("waffle").bumper.spans()
+    middle, half = segments_arc(spans, (1,))  # front_left
+    arc = ContactArc(0.0, 0.0, middle, half, 0.22, heading=0.0)
+    plain = arc.chord(0.32, 0.05)
+    wide = arc.chord(0.32, 0.05, outward=0.15)
+    assert min(y for _, y in wide) == pytest.approx(min(y for _, y in plain))  # the path side unchanged
+    assert max(math.atan2(y, x) for x, y in wide) > max(math.atan2(y, x) for x, y in plain) + 0.4
+    ahead = ContactArc(0.0, 0.0, *segments_arc(spans, (0,)), 0.22, heading=0.0)
+    assert ahead.chord(0.32, 0.05, outward=0.15) == ahead.chord(0.32, 0.05)
+    assert ContactArc(0.0, 0.0, middle, half, 0.22).chord(0.32, 0.05, 0.15) == plain  # heading unknown
