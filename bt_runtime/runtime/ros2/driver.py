@@ -166,7 +166,10 @@ class Ros2Driver:
         """Read the gate's extra velocity inputs (geometry_msgs/Twist, or TwistStamped when the
         input says ``stamped``) and its locks (std_msgs/Bool) from their topics, as the streams
         ``cmd_vel_input/<name>`` (Twist; non-finite or absurd commands are dropped and counted)
-        and ``lock/<name>`` (bool). Best-effort readers, so any publisher matches."""
+        and ``lock/<name>`` (bool). Inputs: best-effort readers, so any publisher matches (a
+        stream at joystick rate needs no retransmission). Locks: reliable readers, as twist_mux's
+        (SystemDefaultsQoS), so a single ``true`` on a lossy link is not lost; a best-effort
+        lock publisher does not match (``lock_publishers()`` shows it)."""
         self._mux_topics = (list(inputs), list(locks))
         if self.node is not None:
             self._open_mux_topics()
@@ -187,11 +190,18 @@ class Ros2Driver:
         for lock in locks:
             stream = LOCK_STREAM + lock.name
             if stream not in self._readers:
-                self._readers[stream] = node.subscription(lock.topic, idl.Bool, qos,
+                self._readers[stream] = node.subscription(lock.topic, idl.Bool, dds.DEFAULT,
                                                           self._stream_handler(stream, lambda m, now: bool(m.data)))
         if inputs or locks:
             log.info("ros2_gate_inputs", inputs={e.name: node.fq(e.topic) for e in inputs},
                      locks={lk.name: node.fq(lk.topic) for lk in locks})
+
+    def lock_publishers(self) -> dict[str, int]:
+        """Matched publishers per gate lock (0: nobody can lock it, e.g. a best-effort writer)."""
+        from ..twist_mux import LOCK_STREAM
+
+        return {s[len(LOCK_STREAM):]: r.matched_writers() for s, r in self._readers.items()
+                if s.startswith(LOCK_STREAM)}
 
     # -- streams ---------------------------------------------------------------------------------
     def _stream_handler(self, stream: str, convert: Callable[[Any, float], Any]) -> Callable[[list, float], None]:

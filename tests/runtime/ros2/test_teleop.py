@@ -65,6 +65,7 @@ async def test_teleop_outranks_navigation_and_loses_to_the_e_stop():
             await wait_until(lambda: runtime.supervisor.all_healthy(names), 15, "components healthy")
             await wait_until(lambda: joystick.get_matched_subscriptions() and e_stop.get_matched_subscriptions(),
                              10, "the runtime to read cmd_vel_teleop and e_stop")
+            assert driver.lock_publishers() == {"e_stop": 1}  # reliable reader, reliable writer
 
             def odom() -> tuple[float, float]:
                 m = driver.latest.get("odom")
