@@ -34,7 +34,6 @@ import asyncio
 import contextlib
 import json
 import math
-import time
 from typing import Any
 
 import structlog
@@ -126,7 +125,7 @@ class SimRobot:
 
     # -- start / stop ------------------------------------------------------------------------------
     async def start(self) -> None:
-        self._ros_offset = time.time() - asyncio.get_running_loop().time()
+        self._ros_offset = idl.Time.now().to_sec() - asyncio.get_running_loop().time()  # ROS time: system clock
         nav_params = ({"controller": {"xy_goal_tolerance": self.goal_tolerance}}
                       if self.goal_tolerance is not None else None)
         extra = {"spawn": self.spawn} if self.spawn is not None else {}
