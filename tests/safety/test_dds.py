@@ -18,6 +18,7 @@ import pytest
 pytest.importorskip("cyclonedds")
 
 from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
+from bt_runtime.runtime.config import RuntimeConfig  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
 from tests.helpers import tree_xml  # noqa: E402
 from tests.paths import ROOT  # noqa: E402
@@ -54,7 +55,9 @@ class DdsBase:
 async def test_loop_stall_zero_reaches_the_base_over_dds(domain):
     base = DdsBase(domain)
     driver = Ros2Driver(Ros2Config(domain_id=domain))
-    runtime = AutonomyRuntime(driver, realtime=True, register=[register_fault_nodes])
+    # no lidar on this bench: collision_monitor-style zones would (rightly) stop a robot without a scan
+    runtime = AutonomyRuntime(driver, RuntimeConfig(safety_zones={"enabled": False}), realtime=True,
+                              register=[register_fault_nodes])
     runtime.load_tree(tree_xml('<StallLoop after="60" seconds="2.0"/>'))
     StallLoop.stalled_at = None
     await runtime.start()
@@ -82,7 +85,7 @@ async def test_sigterm_to_a_driving_ros2_run_ends_at_zero_on_the_wire(domain, tm
     tree.write_text(tree_xml('<Drive linear="0.15"/>'), encoding="utf-8")
     env = dict(os.environ, PYTHONPATH=str(ROOT), ROS_DOMAIN_ID=str(domain))
     proc = subprocess.Popen([sys.executable, "-m", "bt_runtime", "run", str(tree), "--driver", "ros2",
-                             "--ready-timeout", "0.2", "--no-progress", "--register", "tests.safety.support:register_fault_nodes"],
+                             "--ready-timeout", "0.2", "--no-progress", "--collision-monitor", "off", "--register", "tests.safety.support:register_fault_nodes"],
                             cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         deadline = time.monotonic() + 30
