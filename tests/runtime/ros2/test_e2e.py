@@ -161,7 +161,8 @@ async def test_vanished_robot_fails_every_component_and_aborts_navigation(domain
         await runtime.start()
         try:
             names = [c.name for c in driver.components()]
-            await wait_for(lambda: runtime.supervisor.all_healthy(names), 10, "all components OK")
+            # (includes the bring-up of Nav2's servers, which sim-robot starts unconfigured)
+            await wait_for(lambda: runtime.supervisor.all_healthy(names), 25, "all components OK")
             handle = driver.navigation.navigate_to_pose(Pose2D(SPAWN.x + 3.0, SPAWN.y))
             await wait_for(lambda: handle.feedback is not None, 10, "navigation feedback")
             robot.kill()
@@ -335,7 +336,7 @@ async def test_lidar_2_with_the_project_autonomy_tree(domain):
                                      lambda s, now: truth.extend((now, m.pose.position.x, m.pose.position.y) for m in s))
             fault = driver.node.publisher("sim/fault", idl.String)
             names = [c.name for c in driver.components()]
-            await wait_for(lambda: runtime.supervisor.all_healthy(names), 10, f"all of {names} healthy")
+            await wait_for(lambda: runtime.supervisor.all_healthy(names), 25, f"all of {names} healthy")
             bb.set("goal", GOAL)
             bb.set("goal_status", "PENDING")
             await wait_for(lambda: truth and truth[-1][1] > SPAWN.x + 0.3, 20, "the robot to move 0.3 m")

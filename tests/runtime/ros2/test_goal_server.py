@@ -120,7 +120,7 @@ async def test_navigate_to_pose_from_a_plain_dds_client():
             client_node = dds.DdsNode(domain)
             client = RawNavigateClient(client_node)
             names = [c.name for c in driver.components()]
-            await wait_until(lambda: runtime.supervisor.all_healthy(names) and client.ready(), 15,
+            await wait_until(lambda: runtime.supervisor.all_healthy(names) and client.ready(), 25,
                              "components healthy and the action server matched")
 
             # 1. a goal 1 m ahead: feedback on the way, SUCCEEDED
