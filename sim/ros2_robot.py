@@ -17,7 +17,7 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``cmd_vel_nav`` | geometry_msgs/Twist | the stand-in's controller (Nav2 remapped) |
 | ``navigate_to_pose``, ``compute_path_to_pose``, ``follow_path``, ``spin``, ``backup``, ``drive_on_heading``, ``wait`` | nav2_msgs actions | NavStack |
 | ``/global_costmap/clear_entirely_global_costmap``, ``/local_costmap/...`` | nav2_msgs/srv/ClearEntireCostmap | NavStack |
-| ``<component>/get_state``, ``<component>/change_state`` (sensors and planner_server, controller_server, behavior_server) | lifecycle_msgs services | ``Simulator.crash``/``restart``, ``NavStack.crash``/``restart`` |
+| ``<component>/get_state``, ``<component>/change_state`` (sensors and planner_server, controller_server, behavior_server) | lifecycle_msgs services, managed-node state machine (sim/ros2_lifecycle.py): the Nav2 servers start unconfigured unless ``nav_autostart`` | ``Simulator.crash``/``restart``, ``NavStack.crash``/``restart`` |
 | ``speed_limit`` (in) | nav2_msgs/SpeedLimit | ``NavStack.set_speed_limit`` |
 | ``sim/ground_truth`` | geometry_msgs/PoseStamped, 10 Hz: the true pose, for judging only | simulator |
 | ``sim/fault`` (in) | std_msgs/String, a JSON fault (``{"kind": "crash", "component": "lidar"}``; ``nav_crash``/``nav_hang``/``nav_fail_until_restart`` with a nav server ``component``) | ``sim.faults``, ``NavStack`` |

@@ -1,8 +1,10 @@
 """``python -m bt_runtime sim-robot``: the simulator as a ROS 2 robot on DDS.
 
 Publishes the simulated robot's sensors (scan, imu, odom, amcl_pose, battery_state, bumper),
-takes cmd_vel, serves Nav2's actions and costmap services from the Nav2 stand-in and lifecycle
-services for its sensor drivers, on the wall clock, until interrupted. Drive it with
+takes cmd_vel, serves Nav2's actions and costmap services from the Nav2 stand-in, lifecycle
+services for its sensor drivers and Nav2 servers (the servers start unconfigured, as Nav2's do
+before a lifecycle manager activates them, unless --nav-autostart) and the world on /map
+(latched), on the wall clock, until interrupted. Drive it with
 ``python -m bt_runtime run TREE.xml --driver ros2`` or with your own ROS 2 stack (same
 domain id). Needs the ``[ros2]`` extra (cyclonedds). See docs/ros2.md.
 """
