@@ -16,6 +16,7 @@ stand-in (``sim.nav.NavStack``), and a lifecycle interface per sensor driver:
 | ``cmd_vel`` (in) | geometry_msgs/Twist (or TwistStamped) | -> the base |
 | ``cmd_vel_nav`` | geometry_msgs/Twist | the stand-in's controller (Nav2 remapped) |
 | ``navigate_to_pose``, ``compute_path_to_pose``, ``follow_path``, ``spin``, ``backup``, ``drive_on_heading``, ``wait`` | nav2_msgs actions | NavStack |
+| ``dock_robot``, ``undock_robot`` | nav2_msgs/action/DockRobot, UndockRobot (opennav_docking's names; the world's dock is ``home_dock``) | NavStack's docking server |
 | ``/global_costmap/clear_entirely_global_costmap``, ``/local_costmap/...`` | nav2_msgs/srv/ClearEntireCostmap | NavStack |
 | ``<component>/get_state``, ``<component>/change_state`` (sensors and planner_server, controller_server, behavior_server) | lifecycle_msgs services, managed-node state machine (sim/ros2_lifecycle.py): the Nav2 servers start unconfigured unless ``nav_autostart`` | ``Simulator.crash``/``restart``, ``NavStack.crash``/``restart`` |
 | ``speed_limit`` (in) | nav2_msgs/SpeedLimit | ``NavStack.set_speed_limit`` |
@@ -170,6 +171,8 @@ class SimRobot:
             A(node, "backup", idl.BackUp, self._behaviour("backup")),
             A(node, "drive_on_heading", idl.DriveOnHeading, self._behaviour("drive_on_heading")),
             A(node, "wait", idl.Wait, self._behaviour("wait")),
+            A(node, "dock_robot", idl.DockRobot, self._dock),
+            A(node, "undock_robot", idl.UndockRobot, self._undock),
         ]
         for which in ("global", "local"):
             self._servers.append(dds.ServiceServer(
@@ -354,6 +357,26 @@ class SimRobot:
             goal_checker_id=goal.goal_checker_id, progress_checker_id=goal.progress_checker_id, feedback=feedback))
         return STATUS[result.status], idl.FollowPath.Result(error_code=int(result.error_code),
                                                             error_msg=result.error_msg)
+
+    async def _dock(self, goal: Any, ctx: dds.GoalContext) -> tuple[int, Any]:
+        def feedback(fb: Any) -> None:
+            ctx.publish_feedback(idl.DockRobot.Feedback(state=fb.state, docking_time=idl.Duration.from_sec(
+                fb.docking_time), num_retries=fb.num_retries))
+
+        pose = None if goal.use_dock_id else pose2d_of(goal.dock_pose.pose)
+        result = await self._run_handle(self.driver.navigation.dock_robot(
+            use_dock_id=goal.use_dock_id, dock_id=goal.dock_id, dock_pose=pose, dock_type=goal.dock_type,
+            max_staging_time=goal.max_staging_time, navigate_to_staging_pose=goal.navigate_to_staging_pose,
+            feedback=feedback))
+        return STATUS[result.status], idl.DockRobot.Result(
+            success=result.succeeded, error_code=int(result.error_code), num_retries=result.num_retries,
+            error_msg=result.error_msg)
+
+    async def _undock(self, goal: Any, ctx: dds.GoalContext) -> tuple[int, Any]:
+        result = await self._run_handle(self.driver.navigation.undock_robot(
+            dock_type=goal.dock_type, max_undocking_time=goal.max_undocking_time))
+        return STATUS[result.status], idl.UndockRobot.Result(success=result.succeeded, error_code=int(result.error_code),
+                                                             error_msg=result.error_msg)
 
     def _behaviour(self, kind: str):
         types = {"spin": idl.Spin, "backup": idl.BackUp, "drive_on_heading": idl.DriveOnHeading,

@@ -73,6 +73,8 @@ class Navigation(_Model):
     back_up: str = "backup"
     drive_on_heading: str = "drive_on_heading"
     wait: str = "wait"
+    dock_robot: str = "dock_robot"  # opennav_docking's docking_server
+    undock_robot: str = "undock_robot"
     clear_global_costmap: str = "/global_costmap/clear_entirely_global_costmap"
     clear_local_costmap: str = "/local_costmap/clear_entirely_local_costmap"
     global_costmap: str | None = Field("/global_costmap/costmap", description="nav_msgs/OccupancyGrid "

@@ -157,7 +157,9 @@ class Converter:
 
 UNKNOWN_CODE = {"navigate_to_pose": E.NAVIGATE_UNKNOWN, "compute_path_to_pose": E.PLANNER_UNKNOWN,
                 "follow_path": E.CONTROLLER_UNKNOWN, "spin": E.BEHAVIOR_UNKNOWN, "backup": E.BEHAVIOR_UNKNOWN,
-                "drive_on_heading": E.BEHAVIOR_UNKNOWN, "wait": E.BEHAVIOR_UNKNOWN}
+                "drive_on_heading": E.BEHAVIOR_UNKNOWN, "wait": E.BEHAVIOR_UNKNOWN,
+                "dock_robot": 999, "undock_robot": 999}  # DockRobot/UndockRobot UNKNOWN
+DOCKING = ("dock_robot", "undock_robot")  # their codes (901-907, 999) are passed on as they are
 # Jazzy gives BackUp 710.., DriveOnHeading 720.., Wait 740..; the runtime uses Spin's 700..
 BEHAVIOR_CODES = {710: E.BEHAVIOR_UNKNOWN, 711: E.BEHAVIOR_TIMEOUT, 712: E.BEHAVIOR_TF_ERROR,
                   713: E.INVALID_INPUT, 714: E.COLLISION_AHEAD, 720: E.BEHAVIOR_UNKNOWN,
@@ -165,7 +167,9 @@ BEHAVIOR_CODES = {710: E.BEHAVIOR_UNKNOWN, 711: E.BEHAVIOR_TIMEOUT, 712: E.BEHAV
                   724: E.INVALID_INPUT, 740: E.BEHAVIOR_UNKNOWN, 741: E.BEHAVIOR_TIMEOUT}
 
 
-def error_code_of(kind: str, value: int) -> NavErrorCode:
+def error_code_of(kind: str, value: int) -> NavErrorCode | int:
+    if kind in DOCKING:
+        return int(value)
     if value in BEHAVIOR_CODES:
         return BEHAVIOR_CODES[value]
     try:

@@ -41,11 +41,11 @@ from cyclonedds.idl.types import (
 
 __all__ = [
     "ActionTypes", "BackUp", "BatteryState", "Bool", "ChangeState_Request", "ChangeState_Response",
-    "ComputePathToPose", "DiagnosticArray", "DiagnosticStatus", "DriveOnHeading", "Duration", "Empty", "FollowPath", "GetState_Request",
+    "ComputePathToPose", "DiagnosticArray", "DiagnosticStatus", "DockRobot", "DriveOnHeading", "Duration", "Empty", "FollowPath", "GetState_Request",
     "GetState_Response", "GoalInfo", "KeyValue", "GoalStatus", "GoalStatusArray", "Header", "Imu",
     "LaserScan", "MapMetaData", "NavigateToPose", "OccupancyGrid", "String", "Odometry", "Path", "Point", "Pose", "PoseStamped",
     "PoseWithCovariance", "PoseWithCovarianceStamped", "Quaternion", "Spin", "SpeedLimit", "State", "Time",
-    "Transition", "Twist", "TwistStamped", "TwistWithCovariance", "UUID", "Vector3",
+    "Transition", "Twist", "TwistStamped", "TwistWithCovariance", "UUID", "UndockRobot", "Vector3",
     "Vector3Stamped", "Wait", "request_id", "service_wire", "unwrap", "wrap",
 ]
 
@@ -497,8 +497,20 @@ Wait = ActionTypes("nav2_msgs", "Wait", goal=[("time", Duration, _of(Duration))]
                    result=[("total_elapsed_time", Duration, _of(Duration)), *_ERRORS],
                    feedback=[("time_left", Duration, _of(Duration))])
 
+# opennav_docking (nav2_msgs, Jazzy): result codes 901-907, 999; feedback states 1-5
+DockRobot = ActionTypes("nav2_msgs", "DockRobot", goal=[
+    ("use_dock_id", bool, True), ("dock_id", str, ""), ("dock_pose", PoseStamped, _of(PoseStamped)),
+    ("dock_type", str, ""), ("max_staging_time", float32, 1000.0), ("navigate_to_staging_pose", bool, True)],
+    result=[("success", bool, True), ("error_code", uint16, 0), ("num_retries", uint16, 0), ("error_msg", str, "")],
+    feedback=[("state", uint16, 0), ("docking_time", Duration, _of(Duration)), ("num_retries", uint16, 0)])
+
+UndockRobot = ActionTypes("nav2_msgs", "UndockRobot", goal=[
+    ("dock_type", str, ""), ("max_undocking_time", float32, 30.0)],
+    result=[("success", bool, True), ("error_code", uint16, 0), ("error_msg", str, "")],
+    feedback=[])
+
 ACTIONS = {a.name: a for a in (NavigateToPose, ComputePathToPose, FollowPath, Spin, BackUp,
-                                DriveOnHeading, Wait)}
+                                DriveOnHeading, Wait, DockRobot, UndockRobot)}
 
 _WIRE_CACHE: dict[tuple, type] = {}
 

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import structlog
 
-from ..messages import ActionStatus, NavErrorCode, NavFeedback, NavResult, Path, Pose2D
+from ..messages import ActionStatus, DockFeedback, NavErrorCode, NavFeedback, NavResult, Path, Pose2D
 from . import dds, idl
 from .convert import UNKNOWN_CODE, error_code_of, path_of, pose2d_of, pose_msg
 
@@ -63,12 +63,13 @@ class Ros2NavHandle:
             return NavResult(ActionStatus.ABORTED, unknown, f"action server {self.client.name} is gone")
         code = int(getattr(result, "error_code", 0))
         msg = str(getattr(result, "error_msg", ""))
+        retries = int(getattr(result, "num_retries", 0))  # DockRobot
         if status == S.STATUS_SUCCEEDED:
-            return NavResult(ActionStatus.SUCCEEDED, E.NONE, msg)
+            return NavResult(ActionStatus.SUCCEEDED, E.NONE, msg, num_retries=retries)
         if status == S.STATUS_CANCELED:
-            return NavResult(ActionStatus.CANCELED, E.NONE, msg or "canceled")
+            return NavResult(ActionStatus.CANCELED, E.NONE, msg or "canceled", num_retries=retries)
         return NavResult(ActionStatus.ABORTED, error_code_of(self.kind, code) if code else unknown,
-                         msg or f"goal ended with status {status}")
+                         msg or f"goal ended with status {status}", num_retries=retries)
 
     def _on_feedback(self, raw: Any) -> None:
         try:
@@ -155,7 +156,8 @@ class Ros2Navigation:
                  "compute_path_to_pose": (cfg.compute_path_to_pose, idl.ComputePathToPose),
                  "follow_path": (cfg.follow_path, idl.FollowPath), "spin": (cfg.spin, idl.Spin),
                  "backup": (cfg.back_up, idl.BackUp), "drive_on_heading": (cfg.drive_on_heading, idl.DriveOnHeading),
-                 "wait": (cfg.wait, idl.Wait)}
+                 "wait": (cfg.wait, idl.Wait), "dock_robot": (cfg.dock_robot, idl.DockRobot),
+                 "undock_robot": (cfg.undock_robot, idl.UndockRobot)}
         for kind, (name, types) in names.items():
             self.clients[kind] = dds.ActionClient(node, name, types)
         self._clear = {
@@ -252,6 +254,23 @@ class Ros2Navigation:
     def wait(self, duration: float) -> Ros2NavHandle:
         msg = idl.Wait.Goal(time=idl.Duration.from_sec(duration))
         return self._launch("wait", msg, None, lambda raw: self._pose_feedback())
+
+    def dock_robot(self, *, use_dock_id: bool = True, dock_id: str = "", dock_pose: Pose2D | None = None,
+                   dock_type: str = "", max_staging_time: float = 1000.0, navigate_to_staging_pose: bool = True,
+                   feedback: Callable[[DockFeedback], None] | None = None) -> Ros2NavHandle:
+        """opennav_docking's ``dock_robot`` (nav2_msgs/action/DockRobot)."""
+        msg = idl.DockRobot.Goal(use_dock_id=use_dock_id, dock_id=dock_id,
+                                 dock_pose=self._stamped(dock_pose if dock_pose is not None else Pose2D(0.0, 0.0)),
+                                 dock_type=dock_type, max_staging_time=max_staging_time,
+                                 navigate_to_staging_pose=navigate_to_staging_pose)
+        return self._launch("dock_robot", msg, feedback,
+                            lambda raw: DockFeedback(self._now(), int(raw.state), raw.docking_time.to_sec(),
+                                                     int(raw.num_retries)))
+
+    def undock_robot(self, *, dock_type: str = "", max_undocking_time: float = 30.0) -> Ros2NavHandle:
+        """opennav_docking's ``undock_robot`` (nav2_msgs/action/UndockRobot)."""
+        msg = idl.UndockRobot.Goal(dock_type=dock_type, max_undocking_time=max_undocking_time)
+        return self._launch("undock_robot", msg, None, lambda raw: None)
 
     def cancel_all(self) -> None:
         for handle in list(self.handles):
