@@ -50,6 +50,15 @@ ACTION_DEFS = {
     "Wait": ("builtin_interfaces/Duration time",
              "builtin_interfaces/Duration total_elapsed_time\nuint16 error_code\nstring error_msg",
              "builtin_interfaces/Duration time_left"),
+    "DockRobot": ("bool use_dock_id true\nstring dock_id\ngeometry_msgs/PoseStamped dock_pose\nstring dock_type\n"
+                  "float32 max_staging_time 1000.0\nbool navigate_to_staging_pose true",
+                  "uint16 NONE=0\nuint16 DOCK_NOT_IN_DB=901\nuint16 UNKNOWN=999\nbool success true\n"
+                  "uint16 error_code 0\nuint16 num_retries 0\nstring error_msg",
+                  "uint16 NONE=0\nuint16 WAIT_FOR_CHARGE=4\nuint16 state\nbuiltin_interfaces/Duration docking_time\n"
+                  "uint16 num_retries 0"),
+    "UndockRobot": ("string dock_type\nfloat32 max_undocking_time 30.0",
+                    "uint16 NONE=0\nuint16 DOCK_NOT_VALID=902\nbool success true\nuint16 error_code 0\n"
+                    "string error_msg", ""),
 }
 SERVICE_DEFS = {
     "lifecycle_msgs/srv/ChangeState_Request": "lifecycle_msgs/Transition transition",
