@@ -11,12 +11,30 @@ import asyncio
 
 from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActionNode, SyncActionNode
 from bt_runtime.node import NodeConfig
-from bt_runtime.ports import input_port, output_port
+from bt_runtime.ports import blackboard_key, input_port, output_port
 from bt_runtime.runtime.supervisor import Health
 
 from .types import ERROR_CODE, NAMES
 
 SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
+
+
+def _listed(node, port: str = "components") -> list[str] | None:
+    """The port's names (None when empty: every component), read once when the XML gives them
+    literally (they cannot change then; a condition asked on every tick stays cheap), else on
+    every call from the blackboard."""
+    cached = node.__dict__.get("_listed_cache", _UNREAD)
+    if cached is not _UNREAD:
+        return cached
+    names = node.get_input(port, [])
+    value = list(names) if names else None
+    raw = node.config.input_ports.get(port)
+    if not isinstance(raw, str) or blackboard_key(raw, port) is None:
+        node._listed_cache = value
+    return value
+
+
+_UNREAD = object()
 
 
 def _names(node, port: str = "components") -> list[str]:
@@ -53,8 +71,7 @@ class ComponentsHealthy(ConditionNode):
         super().__init__(name, config)
 
     def tick(self):
-        names = self.get_input("components", [])
-        bad = self.context.supervisor.not_ok_among(list(names) if names else None)
+        bad = self.context.supervisor.not_ok_among(_listed(self))
         if bad != self._written:  # writing an unchanged list every tick costs more than the check
             self._written = bad
             self.set_output("unhealthy", bad)
@@ -228,5 +245,4 @@ class IsSafeToContinue(ConditionNode):
         ctx = self.context
         if ctx.gate.estop_active:
             return FAILURE
-        names = self.get_input("components", [])
-        return FAILURE if ctx.supervisor.any_dead(list(names) if names else None) else SUCCESS
+        return FAILURE if ctx.supervisor.any_dead(_listed(self)) else SUCCESS

@@ -31,10 +31,10 @@ def free_distances(scan: LaserScan, half_width: float, radius: float) -> tuple[f
     does not (the body passes it without touching), so a robot pushed against a wall can still
     drive along it or away from it."""
     r = np.asarray(scan.ranges, dtype=float)
-    angles = scan.angle_min + scan.angle_increment * np.arange(len(r))
+    cos, sin = _beam_directions(scan.angle_min, scan.angle_increment, len(r))
     ok = np.isfinite(r)
-    x = r[ok] * np.cos(angles[ok])
-    y = np.abs(r[ok] * np.sin(angles[ok]))
+    x = r[ok] * cos[ok]
+    y = np.abs(r[ok] * sin[ok])
     body = y <= radius
     # travel until the body's circle reaches the point; the margin band from the front/back on
     reach = np.where(body, np.sqrt(np.maximum(radius * radius - y * y, 0.0)), radius)
@@ -44,6 +44,21 @@ def free_distances(scan: LaserScan, half_width: float, radius: float) -> tuple[f
     ahead = float(fwd.min()) if len(fwd) else math.inf
     behind = float(back.min()) if len(back) else math.inf
     return max(ahead, 0.0), max(behind, 0.0)
+
+
+_DIRECTIONS: dict[tuple[float, float, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _beam_directions(angle_min: float, increment: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """cos and sin of every beam's angle, computed once per scan geometry (a lidar keeps one)."""
+    key = (angle_min, increment, n)
+    found = _DIRECTIONS.get(key)
+    if found is None:
+        if len(_DIRECTIONS) > 8:
+            _DIRECTIONS.clear()
+        angles = angle_min + increment * np.arange(n)
+        found = _DIRECTIONS[key] = (np.cos(angles), np.sin(angles))
+    return found
 
 
 def allowed_speed(free: float, deceleration: float, reaction: float, margin: float) -> float:

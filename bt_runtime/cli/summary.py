@@ -99,7 +99,8 @@ def format_summary(summary: Any, runtime: Any, goals: list[GoalOutcome], result:
     lines += [
         f"time: {s.sim_time:.2f} s robot time in {s.wall_time:.2f} s wall (x{s.real_time_factor:.1f})",
         f"ticks: {s.ticks}  errors: {s.tick_errors}  overruns: {s.overruns}  "
-        f"tick cost mean {s.tick_cost_mean_ms * 1e3:.1f} us, p99 {s.tick_cost_p99_ms * 1e3:.1f} us  "
+        f"tick CPU mean {s.tick_cost_mean_ms * 1e3:.1f} us, p99 {s.tick_cost_p99_ms * 1e3:.1f} us "
+        f"(wall mean {s.tick_wall_mean_ms * 1e3:.1f} us)  "
         f"lateness p50 {s.lateness_p50_ms * 1e3:.1f} us, p99 {s.lateness_p99_ms * 1e3:.1f} us",
         "health: " + ", ".join(f"{k}={v}" for k, v in s.health.items()),
         f"supervisor events: {s.supervisor_events}  gate switches: {s.gate_switches}"

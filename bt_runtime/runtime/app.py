@@ -59,7 +59,7 @@ class RunSummary:
     ticks: int
     tick_errors: int
     overruns: int
-    tick_cost_mean_ms: float
+    tick_cost_mean_ms: float  # CPU of the ticking thread
     tick_cost_p99_ms: float
     lateness_p50_ms: float
     lateness_p99_ms: float
@@ -68,6 +68,7 @@ class RunSummary:
     gate_switches: int = 0
     estop_reasons: list[str] = field(default_factory=list)
     goal_outcomes: list[str] = field(default_factory=list)
+    tick_wall_mean_ms: float = 0.0  # the same ticks in wall time (CPU plus time descheduled)
     bringup: dict | None = None  # the lifecycle bring-up (supervisor.bringup), when there was one
 
     @property
@@ -349,6 +350,7 @@ class AutonomyRuntime:
             overruns=loop_stats.overruns if loop_stats else 0,
             tick_cost_mean_ms=(loop_stats.cost_mean * 1e3) if loop_stats else 0.0,
             tick_cost_p99_ms=cost.get("p99", 0.0) * 1e3,
+            tick_wall_mean_ms=(loop_stats.wall_mean * 1e3) if loop_stats else 0.0,
             lateness_p50_ms=late.get("p50", 0.0) * 1e3,
             lateness_p99_ms=late.get("p99", 0.0) * 1e3,
             health=self.supervisor.summary(),

@@ -103,6 +103,8 @@ class SystemSupervisor:
         self._listeners: list[Callable[[SupervisorEvent], Any]] = []
         self._dead: set[str] = set()
         self.motion: MotionWitness | None = None
+        self._version = 0  # bumped on every change of state, watch or set of components
+        self._not_ok_cache: dict[tuple[str, ...] | None, tuple[int, float, list[str]]] = {}
         self.bringup = BringupReport()  # the lifecycle bring-up at start (bring_up())
 
     # -- setup ---------------------------------------------------------------------------------
@@ -134,6 +136,7 @@ class SystemSupervisor:
         record.state_since = self.clock()
         record.depends_on = tuple(info.extra.get("depends_on", ()))
         self.components[info.name] = record
+        self._version += 1
         for stream in info.streams:
             self._unsubscribe.append(self.driver.subscribe(stream, self._seen_callback(record)))
 
@@ -157,6 +160,7 @@ class SystemSupervisor:
                                  auto_restart, restart is not None, restart)
         record.state_since = self.clock()
         self.components[name] = record
+        self._version += 1
 
     def _seen_callback(self, record: ComponentRecord) -> Callable[[Any], None]:
         clock = self.clock
@@ -186,6 +190,7 @@ class SystemSupervisor:
         """Stop (or resume) expecting messages from ``name``; resuming restarts its clock."""
         record = self.components[name]
         record.watched = watched
+        self._version += 1
         if watched:
             record.last_seen = self.clock()
 
@@ -259,6 +264,7 @@ class SystemSupervisor:
         now = self.clock()
         record.state = state
         record.state_since = now
+        self._version += 1
         if state is Health.DEAD:
             self._dead.add(record.name)
         event = SupervisorEvent(now, record.name, state, previous, reason)
@@ -311,10 +317,19 @@ class SystemSupervisor:
         """The components of ``names`` (every one but the tree when None) that are not OK:
         as ``failed_among``, plus those not heard from yet (UNKNOWN) and names the supervisor
         does not watch. UNKNOWN is not OK: a condition that lets it pass lets a goal start
-        before localization or the planner has spoken."""
+        before localization or the planner has spoken.
+
+        Asked on every tick, so the answer is kept until something can change it: a state or
+        watch change (``_version``), or the earliest time an OK component's timeout can expire
+        (messages only push that later). The list returned is shared: do not modify it."""
         now = self.clock()
+        key = None if names is None else tuple(names)
+        cached = self._not_ok_cache.get(key)
+        if cached is not None and cached[0] == self._version and now <= cached[1]:
+            return cached[2]
         records = self.components
         out = []
+        valid_until = float("inf")
         for name in (names if names is not None else records):
             record = records.get(name)
             if record is None:
@@ -324,10 +339,16 @@ class SystemSupervisor:
                 continue
             if record.state is Health.OK:
                 seen = record.last_seen
-                if record.watched and seen is not None and now - seen > record.timeout:
-                    out.append(name)
+                if record.watched and seen is not None:
+                    expiry = seen + record.timeout
+                    if now > expiry:  # the watchdog has not failed it yet: a message may revive it
+                        out.append(name)
+                        valid_until = -float("inf")
+                    elif expiry < valid_until:
+                        valid_until = expiry
             else:
                 out.append(name)
+        self._not_ok_cache[key] = (self._version, valid_until, out)
         return out
 
     def any_dead(self, names: list[str] | None = None) -> bool:
@@ -396,12 +417,14 @@ class SystemSupervisor:
         held = {c for c in plan.components.values() if c in self.components}
         for name in held:
             self.components[name].watched = False
+        self._version += 1
 
         def resume(name: str | None) -> ComponentRecord | None:
             record = self.components.get(name) if name in held else None
             if record is not None:
                 held.discard(name)
                 record.watched = True
+                self._version += 1
                 record.state_since = max(record.state_since, self.clock())  # its grace starts now
             return record
 

@@ -80,3 +80,26 @@ async def test_one_pass_queries_agree_with_the_per_component_ones(make_runtime):
     await sup.restart("lidar")
     assert sup.any_dead() and sup.any_dead(["lidar"]) and not sup.any_dead(["imu"])
     await rt.stop()
+
+
+async def test_the_kept_not_ok_answer_always_agrees_with_each_components_health(make_runtime):
+    rt = make_runtime()
+    await rt.start()
+    sup = rt.supervisor
+
+    def agree() -> None:
+        expected = [n for n in sup.components if n != "tree" and sup.health(n) is not Health.OK]
+        assert sup.not_ok_among() == expected
+        assert sup.not_ok_among(["imu", "lidar"]) == [n for n in ("imu", "lidar") if n in expected]
+
+    try:
+        for step in range(400):  # 4 s at the tick's pace: start-up, a crash, its timeout, a restart
+            if step == 100:
+                rt.driver.sim.crash("imu")
+            if step == 250:
+                asyncio.get_running_loop().create_task(sup.restart("imu"))
+            agree()
+            await asyncio.sleep(0.01)
+        assert sup.health("imu") is Health.OK
+    finally:
+        await rt.stop()

@@ -140,3 +140,22 @@ async def test_a_wake_up_between_ticks_does_not_tick_twice(make_runtime):
     assert len(ticks) >= 3
     gaps = [b - a for a, b in zip(ticks, ticks[1:])]
     assert min(gaps) > 0.009  # one tick per period, never a back-to-back re-tick
+
+
+async def test_tick_cost_is_the_threads_cpu_and_the_wall_time_is_kept_apart(make_runtime):
+    """A tick that waits without computing (here: a blocking sleep, as a descheduled thread on
+    a busy machine) costs wall time, not CPU: the two are reported apart."""
+    import time
+
+    def register(factory):
+        factory.register_simple_condition("Blocked", lambda n: (time.sleep(0.003), NodeStatus.SUCCESS)[1])
+
+    rt = make_runtime(tree_xml('<KeepRunningUntilFailure><Blocked/></KeepRunningUntilFailure>'),
+                      register=[register])
+    await rt.start()
+    await asyncio.sleep(0.3)
+    await rt.stop()
+    stats = rt.tick_loop.stats
+    assert stats.count >= 20
+    assert stats.wall_mean >= 0.003
+    assert stats.cost_mean < 0.001
