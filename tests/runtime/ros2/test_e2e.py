@@ -33,7 +33,8 @@ from tests.helpers import SimRobotProcess  # noqa: E402
 from tests.helpers import wait_until as wait_for  # noqa: E402
 from tests.paths import ROOT
 
-SPAWN = Pose2D(-2.0, -2.0, 0.0)  # apartment spawn
+SPAWN = Pose2D(-2.0, -2.0, 0.0)  # apartment spawn (also the spawn of its map_server map)
+MAP_WORLD = ROOT / "sim" / "worlds" / "maps" / "apartment_map.yaml"
 GOAL = Pose2D(-1.0, -2.0, 0.0)  # 1 m straight ahead
 
 
@@ -318,10 +319,11 @@ def record_failed_reports(supervisor) -> list[tuple[float, str]]:
 
 @pytest.mark.skipif(not AUTONOMY_TREE.exists(), reason="trees/autonomy.xml not present")
 async def test_lidar_2_with_the_project_autonomy_tree(domain):
-    """The same tree as in simulation (trees/autonomy.xml + nodes), now on a ROS 2 robot."""
+    """The same tree as in simulation (trees/autonomy.xml + nodes), now on a ROS 2 robot whose
+    world is a map_server map (the apartment as YAML + PGM, as a user's own map would be)."""
     nodes = pytest.importorskip("nodes")
     pytest.importorskip("nodes.nav2")  # the Nav2-named nodes (NavigateToPose, ComputePathToPose)
-    async with sim_robot(domain, "--robot", "rosbot2", "--goal-tolerance", "0.1") as _robot:
+    async with sim_robot(domain, "--robot", "rosbot2", "--goal-tolerance", "0.1", "--world", str(MAP_WORLD)) as _robot:
         # the ROSbot 2.0 has no bumper (it senses collisions with its IMU): do not wait for one
         driver = Ros2Driver(Ros2Config(domain_id=domain).without_components("bumper"))
         runtime = AutonomyRuntime(driver, realtime=True, register=[nodes.register_all])
