@@ -144,3 +144,23 @@ async def test_bring_up_in_order_and_a_node_that_will_not_activate(robot, domain
         listener.close()
     assert runtime.summary().bringup["failed_node"] == "behavior_server"
 
+
+
+def test_sim_robot_map_and_lifecycle_options(capsys):
+    """Built-in worlds serve the stand-in's grid on /map; --refuse-activate names a real node."""
+    import argparse
+
+    from bt_runtime.cli import sim_robot
+    from sim.driver import SimDriver
+    from sim.ros2_map import occupancy_msg, world_grid
+
+    driver = SimDriver("apartment", "burger")
+    grid = world_grid("apartment", driver.map)
+    assert grid is driver.map  # not a map_server file: the grid the stand-in plans on
+    msg = occupancy_msg(grid)
+    assert (msg.info.width, msg.info.height, len(msg.data)) == (grid.width, grid.height, grid.width * grid.height)
+    assert msg.info.resolution == pytest.approx(0.05) and 100 in msg.data
+    parser = argparse.ArgumentParser()
+    sim_robot.add_parser(parser.add_subparsers())
+    assert sim_robot.run(parser.parse_args(["sim-robot", "--refuse-activate", "planer_server"])) == 2
+    assert "no lifecycle node planer_server" in capsys.readouterr().err
