@@ -271,9 +271,9 @@ def run_nav2(repeat: int) -> None:
 
 def _clear_script_cache() -> None:
     """Forget compiled scripts (a fresh process): BT.CPP compiles every script it loads."""
-    from bt_runtime.script import compile_script
+    from bt_runtime.script import compiler
 
-    compile_script.cache_clear()
+    getattr(compiler, "forget_compiled", compiler.compile_script.cache_clear)()
 
 
 def _load_cell(samples: list[float], nodes: int) -> str:

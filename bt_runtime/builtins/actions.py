@@ -3,38 +3,65 @@ SetBlackboard, UnsetBlackboard (spec 4.5). Sleep and WasEntryUpdated live with t
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
+from itertools import repeat
+
 from ..errors import BTRuntimeError, LogicError
-from ..node import ConditionNode, NodeConfig, SyncActionNode
+from ..node import ConditionNode, NodeConfig, SyncActionNode, TreeNode
 from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port, type_of_value
 from ..script import compile_node_script
 from ..status import FAILURE, SUCCESS, NodeStatus
 
 
 class AlwaysSuccessNode(SyncActionNode):
+    _bare_tick_ok = True  # never RUNNING: parents may call the bare tick
+
     def tick(self) -> NodeStatus:
         return SUCCESS
 
+    def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        return _returns_success
+
 
 class AlwaysFailureNode(SyncActionNode):
+    _bare_tick_ok = True
+
     def tick(self) -> NodeStatus:
         return FAILURE
+
+    def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        return _returns_failure
+
+
+# f(node) -> the status, without a Python frame: next() of an endless repeat, whose second
+# argument (the node) would only be the default of an exhausted iterator. What parents call.
+_returns_success = partial(next, repeat(SUCCESS))
+_returns_failure = partial(next, repeat(FAILURE))
 
 
 class _ScriptHolder:
     """Compile the ``code`` port once; recompile only if its text changes.
 
-    A literal ``code`` (the usual case) cannot change, so it is never read again after the
-    first compile; only code taken from a blackboard entry is re-read on every tick."""
+    A literal ``code`` (the usual case) cannot change, so it is compiled as it stands in the
+    XML (what reading the port would return: the text, a string port or an untyped one) and
+    never read again; only code taken from a blackboard entry is re-read on every tick."""
 
+    __slots__ = ()  # the nodes hold _code_text, _script, _code_from_blackboard in slots
     _kind = "Script"
 
     def _init_script(self) -> None:
-        self._code_text: str | None = None
-        self._script = None
         raw = self.config.input_ports.get("code")
         if raw is None:
             raise BTRuntimeError(f"Missing port [code] in {self._kind}")
-        self._code_from_blackboard = isinstance(raw, str) and blackboard_key(raw, "code") is not None
+        if type(raw) is str and blackboard_key(raw, "code") is None:
+            self._code_from_blackboard = False
+            self._script = compile_node_script(raw)
+            self._code_text = raw
+            return
+        self._code_text = None
+        self._script = None
+        self._code_from_blackboard = isinstance(raw, str)
         self._load()
 
     def _load(self) -> None:
@@ -52,7 +79,9 @@ class _ScriptHolder:
 class ScriptNode(_ScriptHolder, SyncActionNode):
     """Run a script (assignments, expressions); always SUCCESS."""
 
+    __slots__ = ("_code_text", "_script", "_code_from_blackboard")
     _kind = "Script"
+    _bare_tick_ok = True  # tick() always returns SUCCESS: no RUNNING check needed
 
     @classmethod
     def provided_ports(cls):
@@ -72,6 +101,7 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
 class ScriptConditionNode(_ScriptHolder, ConditionNode):
     """SUCCESS if the script's last value is true, else FAILURE."""
 
+    __slots__ = ("_code_text", "_script", "_code_from_blackboard")
     _kind = "ScriptCondition"
 
     @classmethod

@@ -9,6 +9,7 @@ made only of literals are evaluated once here when that cannot fail. No ``eval``
 from __future__ import annotations
 
 import operator
+import re
 from functools import lru_cache
 from typing import Any
 
@@ -231,28 +232,94 @@ def _fold(node: Node) -> Node:
     return node
 
 
-def compile_node(node: Node) -> Fn:
+def _fold_all(node: Node) -> Node:
+    """``_fold`` applied wherever compiling folds: at every node (``_fold`` itself stops at
+    comparisons, ternaries and assignments)."""
     node = _fold(node)
+    if isinstance(node, Unary):
+        return Unary(node.op, _fold_all(node.operand))
+    if isinstance(node, Binary):
+        return Binary(node.op, _fold_all(node.left), _fold_all(node.right))
+    if isinstance(node, Compare):
+        return Compare(node.ops, [_fold_all(n) for n in node.operands])
+    if isinstance(node, Ternary):
+        return Ternary(_fold_all(node.cond), _fold_all(node.then), _fold_all(node.other))
+    if isinstance(node, Assign):
+        return Assign(node.op, node.target, _fold_all(node.value))
+    return node
+
+
+def compile_node(node: Node, names: dict[str, str] | None = None) -> Fn:
+    """The closure of ``node``; ``names`` renames variables (a template's placeholders)."""
+    return _emit(_fold_all(node), names or {})
+
+
+def _emit(node: Node, names: dict[str, str]) -> Fn:
+    """``compile_node`` of a node already through ``_fold_all``."""
     if isinstance(node, Literal):
         return _literal(node.value)
     if isinstance(node, Name):
-        return _name(node.name)
+        return _name(names.get(node.name, node.name))
     if isinstance(node, Unary):
-        return _unary(node.op, compile_node(node.operand))
+        return _unary(node.op, _emit(node.operand, names))
     if isinstance(node, Binary):
-        return _binary(node.op, compile_node(node.left), compile_node(node.right), node.right)
+        return _binary(node.op, _emit(node.left, names), _emit(node.right, names), node.right)
     if isinstance(node, Compare):
-        fns = [compile_node(n) for n in node.operands]
+        fns = [_emit(n, names) for n in node.operands]
         if len(node.ops) == 1:
-            return _compare_one(node.ops[0], fns[0], fns[1], _fold(node.operands[1]))
+            return _compare_one(node.ops[0], fns[0], fns[1], node.operands[1])
         return _compare_chain(node.ops, fns)
     if isinstance(node, Ternary):
-        return _ternary(compile_node(node.cond), compile_node(node.then), compile_node(node.other))
+        return _ternary(_emit(node.cond, names), _emit(node.then, names), _emit(node.other, names))
     if isinstance(node, Assign):
         if isinstance(node.target, Name):
-            return make_assign(node.op, node.target.name, compile_node(node.value))
+            return make_assign(node.op, names.get(node.target.name, node.target.name), _emit(node.value, names))
         return make_bad_assign(node.op)
     raise TypeError(f"unknown AST node {node!r}")
+
+
+# --- templates: scripts that differ only in their variable names share one parse ---------------
+
+# A run of identifier characters where the lexer starts an identifier token (not inside a number
+# such as 1e5, 0x1f or the error token 3foo, which the look-behind leaves alone).
+_IDENTIFIER = re.compile(r"(?<![A-Za-z0-9_@.])[A-Za-z_][A-Za-z0-9_]*")
+# Texts the template path leaves to the plain parse: string literals and '@' (identifiers inside
+# them), non-ASCII, and an identifier right after a dot ('a..b', '65.x'), which the look-behind
+# would leave unrenamed where it could collide with a placeholder.
+_NOT_TEMPLATE = re.compile(r"['@]|\.[A-Za-z_]|[^\x00-\x7f]")
+_MARK = "\x00"  # stands for a variable in a template's key (the text itself never contains it)
+_templates: dict[str, tuple[list[Node], tuple[str, ...]] | None] = {}  # key -> (folded statements, placeholders)
+_TEMPLATES_KEPT = 4096
+
+
+def _parse_via_template(text: str) -> tuple[list[Node], dict[str, str]] | None:
+    """The statements of ``text`` from the parse of its template (every variable renamed
+    ``_0``, ``_1``... in order of appearance) and the renaming back; None when the text is
+    not fit for a template or its template does not parse (then the plain parse reports the
+    error with the text's own positions and names). The token kinds of the template are
+    those of the text, so it parses exactly when the text does, into the same tree."""
+    if _NOT_TEMPLATE.search(text) is not None or _MARK in text:
+        return None
+    found = _IDENTIFIER.findall(text)
+    if "true" in found or "false" in found:  # literals, not variables: no template
+        return None
+    key = _IDENTIFIER.sub(_MARK, text)
+    cached = _templates.get(key, EMPTY)
+    if cached is EMPTY:
+        pieces = key.split(_MARK)
+        placeholders = tuple(f"_{i}" for i in range(len(pieces) - 1))
+        template = pieces[0] + "".join(p + piece for p, piece in zip(placeholders, pieces[1:]))
+        try:
+            cached = ([_fold_all(s) for s in parse(template)], placeholders)
+        except (ParseError, RecursionError):
+            cached = None
+        if len(_templates) >= _TEMPLATES_KEPT:
+            _templates.clear()
+        _templates[key] = cached
+    if cached is None:
+        return None
+    statements, placeholders = cached
+    return statements, dict(zip(placeholders, found))
 
 
 # --- public object --------------------------------------------------------------------------
@@ -297,10 +364,20 @@ def compile_script(text: str) -> Script:
     Raises ``ScriptError`` ('Error in the script "<text>"\\n<parser message>').
     """
     try:
-        statements = parse(text)
-        fn = _sequence([compile_node(s) for s in statements])
+        via_template = _parse_via_template(text)
+        if via_template is not None:
+            statements, names = via_template
+            fn = _sequence([_emit(s, names) for s in statements])
+        else:
+            fn = _sequence([compile_node(s) for s in parse(text)])
     except ParseError as exc:
         raise ScriptError(text, str(exc)) from None
     except RecursionError:
         raise ScriptError(text, "Parse error at position 0: expression nested too deeply") from None
     return Script(text, fn)
+
+
+def forget_compiled() -> None:
+    """Empty the caches of compiled scripts and templates (a fresh process: benchmarks)."""
+    compile_script.cache_clear()
+    _templates.clear()

@@ -27,9 +27,14 @@ MAX_XML_BYTES = 16 * 1024 * 1024
 _START_TAG = re.compile(r"""<[A-Za-z_:][-\w:.]*(?:\s+[^\s=/>]+\s*=\s*(?:"[^"]*"|'[^']*'))*\s*/?>""")
 _ATTR_VALUE = re.compile(r"""=(\s*)("[^"]*"|'[^']*')""")
 _VALID_ENTITY = re.compile(r"&(?:amp|lt|gt|quot|apos|#[0-9]+|#x[0-9a-fA-F]+);")
-_NEEDS_FIX = re.compile(r"""=\s*(?:"[^"]*[<&\n\t\r][^"]*"|'[^']*[<&\n\t\r][^']*')""")
-# Finds at least every match of _NEEDS_FIX, without backtracking (a pre-check on the whole text)
-_MAY_NEED_FIX = re.compile(r"""=\s*+(?:"[^"<&\n\t\r]*+|'[^'<&\n\t\r]*+)[<&\n\t\r]""")
+# An attribute value holding a character tinyxml2 tolerates and libxml2 does not: '<', an '&' that
+# starts no entity ('a && b'), or a newline/tab/CR (kept, where XML would turn it into a space).
+# A value whose only '&'s start entities ('x &gt; 0', common in scripts) needs nothing. Possessive
+# (no backtracking), so it also serves as the pre-check on the whole text.
+_OK_ENTITY = r"&(?:amp|lt|gt|quot|apos|#[0-9]++|#x[0-9a-fA-F]++);"
+_NEEDS_FIX = re.compile(rf"""=\s*+(?:"(?:[^"<&\n\t\r]++|{_OK_ENTITY})*+[<&\n\t\r]"""
+                        rf"""|'(?:[^'<&\n\t\r]++|{_OK_ENTITY})*+[<&\n\t\r])""")
+_MAY_NEED_FIX = _NEEDS_FIX
 _DECLARATION = re.compile(r"^\ufeff?\s*<\?xml[^>]*\?>")
 _DTD = re.compile(r"<!(DOCTYPE|ENTITY)", re.IGNORECASE)
 

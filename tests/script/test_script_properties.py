@@ -118,3 +118,46 @@ def test_well_formed_scripts_compile_and_run(statements):
     except BehaviorTreeException:
         return
     assert value is EMPTY or type(value) in (int, float, str, list)
+
+
+def _outcome(compile_one, text: str):
+    """What compiling and running ``text`` gives: the error message or the value and the
+    blackboard's values afterwards."""
+    try:
+        prog = compile_one(text)
+    except ScriptError as exc:
+        return ("compile", str(exc))
+    bb = make_blackboard()
+    try:
+        value = prog.run(bb, ENUMS)
+    except BehaviorTreeException as exc:
+        return ("run", type(exc).__name__, str(exc))
+    values = {key: bb.get_entry(key).value for key in ("a", "b", "e", "new", "_p", "flag", "x1", "y")
+              if bb.get_entry(key) is not None}
+    return ("ok", repr(value), repr(values))
+
+
+def _plain(text: str):
+    """The compiler without the shared templates (a parse of this very text)."""
+    from bt_runtime.script import compiler
+
+    try:
+        return compiler.Script(text, compiler._sequence([compiler.compile_node(s) for s in compiler.parse(text)]))
+    except compiler.ParseError as exc:
+        raise ScriptError(text, str(exc)) from None
+    except RecursionError:
+        raise ScriptError(text, "Parse error at position 0: expression nested too deeply") from None
+
+
+SHARED = ["a := a + 1", "b := b + 1", "x1 := x1 * 2; y := x1 > 3", "new := 0x1f + 1e2", "a > 1 ? b : a",
+          "3foo + a", "a..b", "65.x", "a := 'b'", "_p += 1", "flag && a", "true + a", "trueish := 1"]
+
+
+@settings(derandomize=True, max_examples=600, deadline=None)
+@given(st.one_of(st.lists(EXPRS, min_size=1, max_size=3).map("; ".join),
+                 st.lists(st.sampled_from(TOKENS + ["x1", "y", "1e5", "0x1f"]), min_size=1, max_size=10)
+                 .map(" ".join), st.sampled_from(SHARED)))
+def test_scripts_sharing_a_template_compile_as_their_own_text(text):
+    """Scripts that differ only in variable names share one parse (the template): each still
+    behaves exactly as its own text compiled alone, errors (with their positions) included."""
+    assert _outcome(compile_script, text) == _outcome(_plain, text)
