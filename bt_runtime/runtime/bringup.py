@@ -154,7 +154,9 @@ async def bring_up(driver: BringupDriver, plan: BringupPlan, clock: Callable[[],
                                              plan.service_timeout if first else plan.transition_timeout, clock)
                 if state is None:
                     raise BringupError(f"its lifecycle services ({outcome.node}/get_state) did not answer "
-                                       f"within {plan.service_timeout if first else plan.transition_timeout:g} s")
+                                       f"within {plan.service_timeout if first else plan.transition_timeout:g} s "
+                                       "(is it running, on this domain and namespace, with an RMW whose "
+                                       "services we speak? docs/ros2.md)")
                 if state == FINALIZED:
                     raise BringupError("it is finalized (shut down): restart its process")
                 if phase == "configure" and state == UNCONFIGURED:
