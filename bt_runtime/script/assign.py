@@ -8,6 +8,7 @@ double, string) and the value is converted into it (``Any::copyInto``), spec 6.4
 from __future__ import annotations
 
 import operator
+from time import monotonic_ns as _monotonic_ns
 from typing import Any
 
 from ..blackboard import Blackboard, Entry
@@ -165,14 +166,16 @@ def make_assign(op: str, key: str, value_fn):
 
     if op in (":=", "="):
         def assign(bb: Blackboard, enums):
-            entry = lookup(bb)
+            entry = bb._storage.get(key) or lookup(bb)  # a local entry without the call
             value = value_fn(bb, enums)  # after the entry exists: 'x := x' is 'not initialized'
             if value is EMPTY:
                 raise not_init("right", op)
             dst = entry.value
             tv = type(value)
             if (dst is EMPTY and entry.type.kind == "anytype") or (tv is type(dst) and tv is not int):
-                entry.write(value)
+                entry.value = value  # entry.write(value), inlined
+                entry.sequence_id += 1
+                entry.stamp = _monotonic_ns()
                 return value
             if type(dst) is int and tv is float and dst <= INT64_MAX:
                 new = _fast_int(value, entry)
@@ -185,7 +188,7 @@ def make_assign(op: str, key: str, value_fn):
     arith = {"+=": operator.add, "-=": operator.sub, "*=": operator.mul, "/=": ieee_div}[op]
 
     def update(bb: Blackboard, enums):
-        entry = lookup(bb)
+        entry = bb._storage.get(key) or lookup(bb)  # a local entry without the call
         value = value_fn(bb, enums)
         if value is EMPTY:
             raise not_init("right", op)

@@ -46,7 +46,8 @@ def _name(key: str) -> Fn:
     def name(bb, enums):
         if enums and key in enums:  # a scripting enum shadows a blackboard entry
             return float(enums[key])
-        entry = bb.get_entry(key)
+        # bb.get_entry(key), whose first step (a local entry) is inlined: one call less per read
+        entry = bb._storage.get(key) or bb.get_entry(key)
         if entry is None:
             raise BTRuntimeError(f"Variable not found: {key}")
         value = entry.value
@@ -80,12 +81,30 @@ def _unary(op: str, f: Fn) -> Fn:
     return complement
 
 
-def _binary(op: str, lf: Fn, rf: Fn, right: Node) -> Fn:
+def _binary(op: str, lf: Fn, rf: Fn, right: Node, left: Node | None = None) -> Fn:
     arith = _ARITH.get(op)
     if arith is not None:
         if isinstance(right, Literal) and _exact_number(right.value) and not (op == "/" and right.value == 0):
             const = right.value
             rv = float(const)
+            if isinstance(left, Name):
+                key = left.name
+
+                def name_arith_const(bb, enums):
+                    # lf(bb, enums) inlined for a number in a local entry (the usual 'x + 1');
+                    # anything else (an enum, a remapped key, another type) takes lf itself
+                    entry = None if enums and key in enums else bb._storage.get(key)
+                    if entry is not None:
+                        x = entry.value
+                        t = type(x)
+                        if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                            return arith(x, rv)
+                    x = lf(bb, enums)
+                    t = type(x)
+                    if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                        return arith(x, rv)
+                    return binary(op, x, const)
+                return name_arith_const
 
             def arith_const(bb, enums):
                 x = lf(bb, enums)
@@ -125,11 +144,29 @@ def _binary(op: str, lf: Fn, rf: Fn, right: Node) -> Fn:
     return other
 
 
-def _compare_one(op: str, lf: Fn, rf: Fn, right: Node) -> Fn:
+def _compare_one(op: str, lf: Fn, rf: Fn, right: Node, left: Node | None = None) -> Fn:
     """A single comparison link (the usual case), with fast paths."""
     const = right.value if isinstance(right, Literal) else EMPTY
     if _exact_number(const):
         rv = float(const)
+        if op not in ("==", "!=") and isinstance(left, Name):
+            fails = _FAILS[op]
+            key = left.name
+
+            def name_order_number(bb, enums):
+                # lf(bb, enums) inlined for a number in a local entry (the usual 'x > 0')
+                entry = None if enums and key in enums else bb._storage.get(key)
+                if entry is not None:
+                    x = entry.value
+                    t = type(x)
+                    if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                        return 0.0 if fails(x, rv) else 1.0
+                x = lf(bb, enums)
+                t = type(x)
+                if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                    return 0.0 if fails(x, rv) else 1.0
+                return 1.0 if compare(op, x, const, enums) else 0.0
+            return name_order_number
         if op in ("==", "!="):
             same, differ = (1.0, 0.0) if op == "==" else (0.0, 1.0)
 
@@ -263,11 +300,17 @@ def _emit(node: Node, names: dict[str, str]) -> Fn:
     if isinstance(node, Unary):
         return _unary(node.op, _emit(node.operand, names))
     if isinstance(node, Binary):
-        return _binary(node.op, _emit(node.left, names), _emit(node.right, names), node.right)
+        left = node.left
+        if isinstance(left, Name):
+            left = Name(names.get(left.name, left.name))
+        return _binary(node.op, _emit(node.left, names), _emit(node.right, names), node.right, left)
     if isinstance(node, Compare):
         fns = [_emit(n, names) for n in node.operands]
         if len(node.ops) == 1:
-            return _compare_one(node.ops[0], fns[0], fns[1], node.operands[1])
+            left = node.operands[0]
+            if isinstance(left, Name):
+                left = Name(names.get(left.name, left.name))
+            return _compare_one(node.ops[0], fns[0], fns[1], node.operands[1], left)
         return _compare_chain(node.ops, fns)
     if isinstance(node, Ternary):
         return _ternary(_emit(node.cond, names), _emit(node.then, names), _emit(node.other, names))
