@@ -215,11 +215,20 @@ class RegulatedPurePursuit:
     def _closer_carrot(self, x: float, y: float, yaw: float, tx: list[float], ty: list[float],
                        ld: float, speed: Twist) -> Twist:
         """Deviation from Nav2 (docs/nav.md): the arc to the carrot cuts through an inflated
-        obstacle (a corner of the path beside an obstacle, or a robot standing next to its own
-        collision mark). Before giving up, follow the path more tightly: a carrot at half, then a
-        quarter of the lookahead; turn on the spot towards it when it is off to the side (a
-        circular robot turning in place sweeps nothing), else drive the slow arc through it if
-        that is free for the whole lookahead. Raises NoValidControl when none of them is."""
+        obstacle (the path squeezes past an obstacle, or the robot stands next to its own
+        collision mark). If the path itself is free up to the lookahead, follow it more tightly
+        instead of giving up: a carrot at half, then a quarter of the lookahead; turn on the spot
+        towards it when it is off to the side (a circular robot turning in place sweeps nothing),
+        else drive slowly through it if the way there is free. Raises NoValidControl otherwise
+        (an obstacle on the path itself, or nothing free)."""
+        cm = self.costmap
+        c, s = math.cos(yaw), math.sin(yaw)
+        ld2 = ld * ld
+        for px, py in zip(tx, ty):
+            if px * px + py * py > ld2:
+                break
+            if cm.in_collision(x + c * px - s * py, y + s * px + c * py):
+                raise NoValidControl("RegulatedPurePursuitController detected collision ahead!")
         for scale in (0.5, 0.25):
             cx, cy = self._lookahead_point(tx, ty, max(ld * scale, 0.1))
             angle = math.atan2(cy, cx)
@@ -231,7 +240,7 @@ class RegulatedPurePursuit:
                 continue
             linear = min(0.1, self.max_linear_vel)
             angular = linear * 2.0 * cy / d2
-            if not self._collision_imminent(x, y, yaw, linear, angular, ld, whole=True):
+            if not self._collision_imminent(x, y, yaw, linear, angular, math.sqrt(d2), whole=True):
                 return Twist(linear, angular)
         raise NoValidControl("RegulatedPurePursuitController detected collision ahead!")
 
