@@ -46,6 +46,17 @@ async def test_a_goal_outside_the_map_is_refused_at_once_with_its_reason_and_no_
     assert math.hypot(after.x - before.x, after.y - before.y) < 0.05
 
 
+async def test_a_client_is_told_why_a_goal_outside_the_map_was_refused(runtime):
+    rt = await runtime(AUTONOMY, seed=1)
+    try:
+        await asyncio.sleep(1.0)
+        result = await asyncio.wait_for(rt.send_goal(Pose2D(100.0, 100.0, 0.0)), 10)
+    finally:
+        await rt.stop()
+    assert result.outcome == "REFUSED"
+    assert result.error_msg.startswith("refused: GOAL_OUTSIDE_MAP (204)")
+
+
 async def test_a_goal_inside_an_obstacle_ends_at_a_safe_alternative_not_beside_it(runtime):
     radius = 0.25  # small: Nav2's 0.5 m planner tolerance finds a plannable cell right beside it
     table = {"kind": "obstacle_at", "x": 0.0, "y": -2.0, "radius": radius, "name": "table"}
