@@ -78,6 +78,9 @@ def load_runtime_config(path: str | Path | None) -> RuntimeConfig:
     gate = data.get("gate")
     if isinstance(gate, dict) and isinstance(gate.get("twist_mux"), str):  # relative to this file's folder
         gate["twist_mux"] = str(path.parent / Path(gate["twist_mux"]).expanduser())
+    zones = data.get("safety_zones")
+    if isinstance(zones, dict) and isinstance(zones.get("file"), str):  # likewise
+        zones["file"] = str(path.parent / Path(zones["file"]).expanduser())
     try:
         return RuntimeConfig.model_validate(data)
     except ValidationError as exc:

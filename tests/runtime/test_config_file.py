@@ -29,6 +29,7 @@ def test_the_example_file_loads_and_changes_what_it_says():
     example = yaml.safe_load((ROOT / "docs" / "config.example.yaml").read_text())
     assert cfg.gate.deadman_timeout == example["gate"]["deadman_timeout"] != GateConfig().deadman_timeout
     assert cfg.supervisor.components["battery"].timeout == example["supervisor"]["components"]["battery"]["timeout"]
+    assert cfg.safety_zones.file == str(ROOT / "docs" / "collision_monitor.example.yaml")  # relative to the file
 
 
 @pytest.mark.parametrize("text, message", [
