@@ -374,7 +374,7 @@ class TreeNode:
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
             self._cell.fast = type(self)._execute_tick_full
         elif (cfg._pre or cfg._post) and (after := _after_full_tick(type(self))) is not False:
-            fast = _conditions_tick(type(self).tick, cfg, after)
+            fast = _conditions_tick(self._unbound_tick(), cfg, after)
             self.execute_tick = fast.__get__(self)  # type: ignore[method-assign]
             self._cell.fast = fast
         elif cfg._pre or cfg._post:  # a class with its own _execute_tick_full
@@ -388,6 +388,11 @@ class TreeNode:
 
     def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
         """The function ``f`` with ``f(self)`` equivalent to ``self.tick()``."""
+        return type(self).tick
+
+    def _unbound_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        """``f`` with ``f(self)`` equivalent to ``self.tick()``, for the pre/post-condition
+        closure; unlike ``_bare_tick`` it never depends on the node's current children."""
         return type(self).tick
 
     def refresh_conditions(self) -> None:
@@ -690,6 +695,8 @@ class SimpleConditionNode(ConditionNode):
 
     def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
         return self._fn  # fn(node) is tick(): one Python frame per tick instead of two
+
+    _unbound_tick = _bare_tick
 
 
 class StatefulActionNode(ActionNodeBase):
