@@ -92,3 +92,15 @@ def test_a_dock_pose_without_a_charger_is_retried_then_fails_to_charge():
         assert math.isfinite(driver.sim.battery.soc) and not driver.sim.battery.docked
         await driver.stop()
     run_virtual(main)
+
+
+def test_every_shipped_dock_has_a_free_staging_pose():
+    from sim.nav.docking import DockingParams
+
+    offset = DockingParams().staging_x_offset
+    for name in ("apartment", "round_obstacles"):
+        world = load_world(name)
+        dock = world.dock
+        staging = (dock.x + math.cos(dock.yaw) * offset, dock.y + math.sin(dock.yaw) * offset)
+        assert world.clearance(dock.x, dock.y) >= 0.3, name
+        assert world.clearance(*staging) >= 0.3, (name, staging)  # the robot fits there, and turns
