@@ -46,7 +46,7 @@ async def test_a_stop_zone_halts_a_blind_tree_before_the_wall_over_dds(tmp_path)
     zones_file.write_text(STOP_ZONE)
     robot = SimRobotProcess(domain, "--robot", "burger", "--spawn=-2,-2,1.5708", duration=60.0)
     try:
-        await robot.ready()
+        await robot.ready(timeout=90)  # a loaded machine takes its time to import and start
         driver = Ros2Driver(Ros2Config(domain_id=domain))  # the burger, lidar 0.032 m behind the centre
         config = RuntimeConfig(safety_zones=SafetyZonesSettings(file=str(zones_file)))
         runtime = AutonomyRuntime(driver, config, realtime=True, register=[register_blind_driving])
@@ -56,9 +56,9 @@ async def test_a_stop_zone_halts_a_blind_tree_before_the_wall_over_dds(tmp_path)
         try:
             driver.node.subscription("sim/ground_truth", idl.PoseStamped, dds.DEFAULT,
                                      lambda s, now: truth.extend((m.pose.position.x, m.pose.position.y) for m in s))
-            await wait_for(lambda: truth and truth[-1][1] > -1.9, 20, "the robot to drive 0.1 m")
+            await wait_for(lambda: truth and truth[-1][1] > -1.9, 40, "the robot to drive 0.1 m")
             # 1.75 m at 0.22 m/s: 8 s to the wall; the zone must have stopped it by then
-            await wait_for(lambda: runtime.safety_zones.state.zone == "PolygonStop", 30, "the stop zone")
+            await wait_for(lambda: runtime.safety_zones.state.zone == "PolygonStop", 40, "the stop zone")
             stopped_at = truth[-1]
             await asyncio.sleep(2.0)  # it stays stopped while the tree keeps commanding
             bb = runtime.tree.root_blackboard
