@@ -259,7 +259,8 @@ class MarkObstacle(AsyncActionNode):
     With a contact ``arc`` the mark covers it: discs of ``radius`` just outside the body along
     the arc, extended ``margin`` m past each end (the chord plus a margin), so corner and
     oblique hits are covered; ``outward`` m further on the far side of a touch off to one side
-    of the front (the obstacle lies that way). A hit within ``merge_distance`` of an earlier
+    of the front (the obstacle lies that way). Nothing is marked where the body stands now. A
+    hit within ``merge_distance`` of an earlier
     mark grows that mark. Without an arc, one disc at ``point``."""
 
     @classmethod
@@ -278,6 +279,13 @@ class MarkObstacle(AsyncActionNode):
         arc = self.get_input("arc", None)
         if isinstance(arc, ContactArc):
             points = arc.chord(arc.radius + radius, self.get_input("margin"), self.get_input("outward"))
+            # where the body stands now (it backed out) is free space: a wide arc (two bumper
+            # segments, plus margins) reaches behind the contact and must not mark it
+            pose = robot_pose(self)
+            if pose is not None and all(map(math.isfinite, (pose.x, pose.y))):
+                keep = ctx.robot.radius + radius
+                free = [p for p in points if math.hypot(p[0] - pose.x, p[1] - pose.y) >= keep]
+                points = free or points[len(points) // 2:len(points) // 2 + 1]
         else:
             point = self.get_input("point")
             points = [(point.x, point.y)]
