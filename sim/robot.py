@@ -11,6 +11,7 @@ its ROS 2 controller configuration); ``waffle`` (0.26 m/s) could too.
 
 from __future__ import annotations
 
+import copy
 import math
 from pathlib import Path
 from typing import Any
@@ -199,15 +200,32 @@ def _merge(base: dict, over: dict) -> dict:
     return out
 
 
+_YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser when present
+_PARSED: dict[tuple[str, int, int], Any] = {}  # (path, mtime_ns, size) -> parsed YAML
+
+
+def _parsed_profile(path: Path) -> Any:
+    """A profile file's YAML, parsed once per process while the file is unchanged (a campaign
+    loads the same profile for every run)."""
+    st = path.stat()
+    key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
+    if key not in _PARSED:
+        try:
+            data = yaml.load(path.read_text(), Loader=_YAML_LOADER)  # noqa: S506 (a safe loader)
+        except yaml.YAMLError as err:
+            raise ProfileError(f"{path}: not valid YAML: {err}") from None
+        if len(_PARSED) >= 16:
+            _PARSED.clear()
+        _PARSED[key] = data
+    return _PARSED[key]
+
+
 def load_profile(name_or_path: str | Path = DEFAULT_PROFILE, **overrides: Any) -> RobotProfile:
     text = str(name_or_path)
     path = ROBOTS_DIR / f"{text}.yaml" if text in SHIPPED_PROFILES else Path(name_or_path)
     if not path.exists():
         raise ProfileError(f"{path}: no such robot profile (shipped: {', '.join(SHIPPED_PROFILES)})")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as err:
-        raise ProfileError(f"{path}: not valid YAML: {err}") from None
+    data = copy.deepcopy(_parsed_profile(path))  # the caller's overrides change its own copy
     if not isinstance(data, dict):
         raise ProfileError(f"{path}: (top level): a robot profile is a mapping")
     for key, value in overrides.items():

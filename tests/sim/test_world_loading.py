@@ -29,3 +29,17 @@ def test_a_changed_file_is_read_again(tmp_path: Path) -> None:
     st = path.stat()
     os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns + 10_000_000))
     assert (before.name, load_world(path).name) == ("apartment", "flat")
+
+
+def test_a_robot_profile_is_parsed_once_and_overrides_stay_with_their_caller(tmp_path: Path) -> None:
+    from sim.robot import ROBOTS_DIR, load_profile
+
+    path = tmp_path / "bot.yaml"
+    path.write_text((ROBOTS_DIR / "burger.yaml").read_text())
+    plain = load_profile(path)
+    fast = load_profile(path, max_linear=plain.max_linear / 2)
+    assert fast.max_linear == plain.max_linear / 2
+    assert load_profile(path) == plain  # the override changed only its own copy
+    path.write_text(path.read_text() + "\n# edited\n")
+    os.utime(path, ns=(1, 1))
+    assert load_profile(path) == plain  # re-read (new size and time), same content
