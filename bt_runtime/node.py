@@ -1111,9 +1111,12 @@ def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig,
 
     The scripts are taken from the config now; code that changes a node's conditions later
     calls ``refresh_conditions()``, as it must for the fast paths too."""
+    from .script import CastError, ScriptRuntimeError, to_bool
+
     pre = cfg._pre or {}
     post = cfg._post or {}
-    idle_checks = tuple((script.run_bool, result, negate) for key, result, negate in (
+    # (the script's closure, its Script for errors, the result, negate): Script.run_bool inlined
+    idle_checks = tuple((script._fn, script, result, negate) for key, result, negate in (
         ("_failureIf", FAILURE, False), ("_successIf", SUCCESS, False), ("_skipIf", SKIPPED, False),
         ("_while", SKIPPED, True)) if (script := pre.get(key)) is not None)
     running_while = pre["_while"].run_bool if "_while" in pre else None
@@ -1127,8 +1130,14 @@ def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig,
         current = cell.status
         status = None
         if current is IDLE:
-            for run_bool, result, negate in idle_checks:
-                if run_bool(bb, enums) is not negate:
+            for fn, script, result, negate in idle_checks:
+                try:
+                    value = fn(bb, enums)
+                except CastError:
+                    raise
+                except BTRuntimeError as exc:  # as Script.run_bool reports it
+                    raise ScriptRuntimeError(f"Error in script [{script.text}]\n{exc}") from exc
+                if (value != 0.0 if type(value) is float and value >= 0.0 else to_bool(value)) is not negate:
                     status = result
                     break
         elif current is RUNNING and running_while is not None and not running_while(bb, enums):

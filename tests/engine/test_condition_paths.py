@@ -25,3 +25,13 @@ def test_a_sync_action_returning_running_is_an_error_with_or_without_conditions(
     tree = _tree(f"<Sequence><Stuck{attrs}/></Sequence>")
     with pytest.raises(BehaviorTreeException, match="never return RUNNING"):
         tree.tick_exactly_once()
+
+
+@pytest.mark.parametrize("hooked", [False, True])
+def test_a_failing_pre_condition_script_is_reported_with_its_text(hooked: bool) -> None:
+    """The specialised condition path and the full one (taken with a hook) report alike."""
+    tree = _tree('<Sequence><AlwaysSuccess name="a" _skipIf="missing &gt; 1"/></Sequence>')
+    if hooked:
+        next(n for n in tree.nodes() if n.name == "a").set_pre_tick_function(lambda node: None)
+    with pytest.raises(BehaviorTreeException, match=r"Error in script \[missing > 1\]\nVariable not found: missing"):
+        tree.tick_exactly_once()
