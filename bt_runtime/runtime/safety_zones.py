@@ -207,6 +207,7 @@ class SafetyZones:
         self.scans = 0
         self.evaluations = 0
         self._unsubscribe: Callable[[], None] | None = None
+        self.on_change: Callable[[ZoneState], None] | None = None  # e.g. the ROS 2 driver's state topic
 
     @classmethod
     def for_robot(cls, robot: RobotInfo, config: CollisionMonitorConfig, **kw) -> SafetyZones:
@@ -341,6 +342,11 @@ class SafetyZones:
             log.info("safety_zone_clear", previous=previous.zone, sim_time=round(state.stamp, 3))
         if self.backup is not None:
             self.backup.record(STREAM, state, state.stamp)
+        if self.on_change is not None:
+            try:
+                self.on_change(state)
+            except Exception as exc:  # publishing the state must never stop the gate
+                log.error("safety_zone_publish_failed", error=repr(exc))
 
 
 def build_safety_zones(settings: SafetyZonesSettings, robot: RobotInfo, driver: RobotDriver, *,
@@ -359,6 +365,9 @@ def build_safety_zones(settings: SafetyZonesSettings, robot: RobotInfo, driver: 
             return None
         config, origin = default_config(robot), "defaults"
     zones = SafetyZones.for_robot(robot, config, clock=clock, backup=backup, origin=origin)
+    publish = getattr(driver, "publish_collision_monitor_state", None)
+    if callable(publish):  # where the driver speaks ROS: collision_monitor_state on every change
+        zones.on_change = lambda state: publish(state.action, state.zone)
     log.info("safety_zones", origin=origin, zones=[f"{z.name}:{z.action}" for z in zones.zones if z.enabled],
              source_timeout=zones.source_timeout, lidar_mount=list(zones.mount))
     return zones

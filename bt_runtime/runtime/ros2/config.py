@@ -59,6 +59,9 @@ class Topics(_Model):
     cmd_vel: CmdVelConfig = Field(default_factory=CmdVelConfig)
     diagnostics: str | None = Field("/diagnostics", description="diagnostic_msgs/DiagnosticArray: component "
                                     "health from the supervisor at 1 Hz and on every change (None = off)")
+    collision_monitor_state: str | None = Field(
+        "collision_monitor_state", description="nav2_msgs/CollisionMonitorState: the gate's safety zone "
+                                               "acting now, on every change, as collision_monitor (None = off)")
     nav_cmd_vel: NavCmdVelConfig | None = Field(
         default_factory=lambda: NavCmdVelConfig(name="cmd_vel_nav"),
         description="where Nav2's last velocity stage publishes (remapped away from cmd_vel)")

@@ -83,6 +83,7 @@ class Ros2Driver:
         self._poller: asyncio.Task | None = None
         self.sent = 0
         self._diagnostics_writer: Any = None
+        self._zone_state_writer: Any = None
         self.send_errors = 0
         self.goal_server: Any = None  # action_server.GoalActionServer once serve_goals() ran
         self._mux_topics: tuple[list, list] = ([], [])  # the gate's extra inputs and locks
@@ -306,6 +307,16 @@ class Ros2Driver:
                                  values=[idl.KeyValue(key=k, value=v) for k, v in d.values])
             for d in diagnostics])
         self._diagnostics_writer.write(msg)
+
+    def publish_collision_monitor_state(self, action: str, zone: str) -> None:
+        """The gate's safety-zone state as collision_monitor publishes it (on every change)."""
+        topic = self.config.topics.collision_monitor_state
+        if topic is None or self.node is None:
+            return
+        if self._zone_state_writer is None:
+            self._zone_state_writer = self.node.publisher(topic, idl.CollisionMonitorState, dds.DEFAULT)
+        code = {"stop": 1, "slowdown": 2, "approach": 3, "limit": 4}.get(action, 0)
+        self._zone_state_writer.write(idl.CollisionMonitorState(action_type=code, polygon_name=zone))
 
     def emergency_zero(self) -> None:
         """Write a zero ``cmd_vel`` from any thread (Cyclone's writers are thread-safe); the

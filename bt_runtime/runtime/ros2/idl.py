@@ -280,6 +280,14 @@ class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
     data: str = ""
 
 
+@dataclass
+class CollisionMonitorState(IdlStruct, typename="nav2_msgs::msg::dds_::CollisionMonitorState_"):
+    """action_type: 0 none, 1 stop, 2 slowdown, 3 approach, 4 limit (nav2_msgs' constants)."""
+
+    action_type: uint8 = 0
+    polygon_name: str = ""
+
+
 # --------------------------------------------------------------------------------------------
 # diagnostic_msgs
 # --------------------------------------------------------------------------------------------
