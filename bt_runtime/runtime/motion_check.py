@@ -55,12 +55,14 @@ class MotionWitness:
     def on_command(self, msg: Twist) -> None:
         if not isinstance(msg, Twist):
             return
-        moving = abs(msg.linear) >= self.min_linear or abs(msg.angular) >= self.min_angular
-        if not moving:
+        command = (msg.linear, msg.angular)
+        if command == self._command:  # the base repeats its command every step: nothing new
+            return
+        self._command = command
+        if abs(command[0]) < self.min_linear and abs(command[1]) < self.min_angular:
             self._commanded_since = None
         elif self._commanded_since is None:
             self._commanded_since = self.clock()
-        self._command = (msg.linear, msg.angular)
 
     def on_imu(self, msg: Imu) -> None:
         if isinstance(msg, Imu) and abs(msg.yaw_rate) >= self.min_yaw_rate:
