@@ -70,6 +70,8 @@ SERVICE_DEFS = {
     "nav2_msgs/srv/ClearEntireCostmap_Request": "std_msgs/Empty request",
     "nav2_msgs/srv/ClearEntireCostmap_Response": "std_msgs/Empty response",
     "nav2_msgs/msg/SpeedLimit": "std_msgs/Header header\nbool percentage\nfloat64 speed_limit",
+    "nav2_msgs/msg/CollisionMonitorState": "uint8 DO_NOTHING=0\nuint8 STOP=1\nuint8 SLOWDOWN=2\nuint8 APPROACH=3\n"
+                                           "uint8 LIMIT=4\nuint8 action_type\nstring polygon_name",
 }
 
 
