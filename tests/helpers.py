@@ -12,19 +12,24 @@ IDLE_TREE = tree_xml('<KeepRunningUntilFailure><AlwaysSuccess/></KeepRunningUnti
 
 
 class SimRobotProcess:
-    """``sim-robot`` in its own process on DDS domain ``domain`` (the DDS end-to-end tests)."""
+    """``sim-robot`` in its own process on DDS domain ``domain`` (the DDS end-to-end tests).
+
+    Its stderr goes to a temporary file, not a pipe: a pipe nobody reads fills up with the
+    robot's warnings and blocks it mid-run; the file is read back if the robot fails to start."""
 
     def __init__(self, domain: int, *args: str, duration: float = 80.0):
         import os
         import subprocess
         import sys
+        import tempfile
 
         from tests.paths import ROOT
 
         env = dict(os.environ, PYTHONPATH=str(ROOT))
+        self._stderr = tempfile.TemporaryFile(mode="w+", encoding="utf-8")  # noqa: SIM115 - closed in stop()
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "bt_runtime.cli.sim_robot", "--domain", str(domain), "--duration",
-             f"{duration:g}", *args], cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             f"{duration:g}", *args], cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=self._stderr, text=True)
 
     async def ready(self, timeout: float = 30.0) -> None:
         import asyncio
@@ -32,15 +37,18 @@ class SimRobotProcess:
         loop = asyncio.get_running_loop()
         line = await asyncio.wait_for(loop.run_in_executor(None, self.proc.stdout.readline), timeout)
         if "sim-robot ready" not in line:
-            self.stop()
-            raise AssertionError(f"sim-robot did not start: {line!r} {self.proc.stderr.read()[-2000:]}")
+            self.stop(close=False)
+            self._stderr.seek(0)
+            errors = self._stderr.read()[-2000:]
+            self._stderr.close()
+            raise AssertionError(f"sim-robot did not start: {line!r} {errors}")
 
     def kill(self) -> None:
         """SIGKILL: the robot vanishes without a goodbye (its DDS participant lingers for its lease)."""
         self.proc.kill()
         self.proc.wait(10)
 
-    def stop(self) -> None:
+    def stop(self, close: bool = True) -> None:
         import contextlib
         import subprocess
 
@@ -50,9 +58,11 @@ class SimRobotProcess:
                 self.proc.wait(10)
             except subprocess.TimeoutExpired:
                 self.kill()
-        for stream in (self.proc.stdout, self.proc.stderr):
+        with contextlib.suppress(Exception):
+            self.proc.stdout.close()
+        if close:
             with contextlib.suppress(Exception):
-                stream.close()
+                self._stderr.close()
 
 
 async def wait_until(predicate, timeout: float, what: str) -> None:
