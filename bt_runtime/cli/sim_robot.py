@@ -91,6 +91,15 @@ def run(args: argparse.Namespace) -> int:
     if not 0 <= domain <= 232:
         print(f"error: --domain must be 0..232, got {domain}", file=sys.stderr)
         return EXIT_USAGE
+    from sim.robot import ProfileError, load_profile
+    from sim.world import WorldError, load_world
+
+    try:  # a bad world or robot file is a usage error naming the file and field, not a traceback
+        load_world(args.world)
+        load_profile(args.robot)
+    except (WorldError, ProfileError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
     configure_logging(json=False, stream=sys.stderr, level=args.log_level)
     uri = dds.loopback_config() if args.loopback and not os.environ.get("CYCLONEDDS_URI") else None
     robot = SimRobot(args.world, args.robot, seed=args.seed, domain_id=domain, namespace=args.namespace,
