@@ -2,7 +2,7 @@
 
 * ``states`` (default): after every tick, the nodes whose status differs from their status
   after the previous tick, as ``previous -> current`` events. One pass over the nodes' status
-  cells per tick (a C-level ``map``), no callback on the tick path: ~0.1 % of a run's CPU. What
+  cells per tick (a C-level ``map``), no callback on the tick path: 3-7 us a tick for 95 nodes. What
   it does not show: a node that ran and went back to IDLE within one tick (a condition checked
   and reset by its parent in the same tick), exactly as Groot2's sampled monitor.
 * ``changes``: every status transition, as Nav2's ``RosTopicLogger`` publishes them, through a
