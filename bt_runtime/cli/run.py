@@ -181,7 +181,7 @@ def make_driver(args: argparse.Namespace):
         try:
             from ..runtime.ros2 import Ros2Config, Ros2Driver  # provided by the [ros2] extra
         except ImportError as exc:
-            raise UsageError(f"--driver ros2 is not available: {exc}") from None
+            raise UsageError(f"--driver ros2 needs the [ros2] extra (pip install -e '.[ros2]'): {exc}") from None
         path = getattr(args, "ros2_config", None)
         try:
             config = Ros2Config.load(path) if path else Ros2Config()

@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         from bt_runtime.runtime.ros2 import dds
         from sim.ros2_robot import SimRobot, parse_crash, run_sim_robot
     except ImportError as exc:
-        print(f"error: sim-robot needs the [ros2] extra (cyclonedds): {exc}", file=sys.stderr)
+        print(f"error: sim-robot needs the [ros2] extra (pip install -e '.[ros2]'): {exc}", file=sys.stderr)
         return EXIT_USAGE
     try:
         crashes = [parse_crash(c) for c in args.crash]

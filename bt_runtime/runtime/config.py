@@ -89,14 +89,17 @@ class GateConfig(_Model):
     min_rate_hz: float = Field(10.0, gt=0, description="the gate publishes after every tick and every "
                                                        "navigation command, and at least this often")
     deadman_timeout: float = Field(0.1, gt=0, description="tree heartbeat older than this: zero")
-    nav_stale_timeout: float = Field(0.25, gt=0, description="navigation command older than this: ignored")
-    tree_stale_timeout: float = Field(0.2, gt=0, description="tree command older than this: ignored")
+    nav_stale_timeout: float = Field(0.25, gt=0, description="navigation command older than this: ignored "
+                                                         "(inputs.navigation.timeout, when given, sets it)")
+    tree_stale_timeout: float = Field(0.2, gt=0, description="tree command older than this: ignored "
+                                                          "(inputs.tree.timeout, when given, sets it)")
     passthrough: bool = Field(False, description="baseline mode: forward navigation commands only, "
                                                  "no dead-man, like a plain Nav2 setup")
     priorities: dict[str, int] = Field(
         default_factory=lambda: {"tree": 20, "nav": 10},
         description="twist_mux-style priorities of the two command sources (higher wins while fresh); "
-                    "an emergency stop and the dead-man always come first")
+                    "an emergency stop and the dead-man always come first; an inputs entry "
+                    "named tree or navigation, when given, sets these instead")
 
     @field_validator("priorities")
     @classmethod
