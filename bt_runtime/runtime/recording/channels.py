@@ -44,7 +44,7 @@ class ChannelSet:
         self._foxglove = foxglove
         self.context = foxglove.Context()
         self.channels: dict[str, Any] = {}
-        self.loggers: dict[str, Callable[[bytes, int], None]] = {}  # topic -> log(data, log_time_ns)
+        self.loggers: dict[str, Callable[[bytes, int, None], None]] = {}  # topic -> log(data, log_time_ns, None)
         self.types: dict[str, str] = {}
         self.latched: set[str] = set()
 
@@ -67,10 +67,11 @@ class ChannelSet:
         return channel
 
 
-def _logger(channel: Any) -> Callable[[bytes, int], None]:
-    """``channel.log`` for CDR bytes without the Python wrapper's per-call checks (encoding
-    property, isinstance): the SDK's native ``log(data, log_time, sink_id)`` when it has one."""
+def _logger(channel: Any) -> Callable[[bytes, int, None], None]:
+    """``log(data, log_time_ns, None)`` for CDR bytes: the SDK's native ``log(data, log_time,
+    sink_id)`` when it has one (no Python wrapper and its per-call checks: encoding property,
+    isinstance), else the public ``channel.log``."""
     native = getattr(getattr(channel, "base", None), "log", None)
     if native is None:
-        return lambda data, t_ns: channel.log(data, log_time=t_ns)
-    return lambda data, t_ns: native(data, t_ns, None)
+        return lambda data, t_ns, _sink: channel.log(data, log_time=t_ns)
+    return native

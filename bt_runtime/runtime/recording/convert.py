@@ -94,10 +94,10 @@ class ConvertState:
     odom_pose: tuple[float, float, float] | None = None  # last odom -> base_link
     layouts: dict[Any, Layout] = field(default_factory=dict)
 
-    def layout(self, key: Any, make: Callable[[], Layout]) -> Layout:
+    def layout(self, key: Any, make: Callable[..., Layout], *args: Any) -> Layout:
         found = self.layouts.get(key)
         if found is None:
-            found = self.layouts[key] = make()
+            found = self.layouts[key] = make(*args)
         return found
 
 
@@ -160,7 +160,7 @@ def scan_layout(frame: str, n: int) -> Layout:
 def scan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     ranges = np.ascontiguousarray(m.ranges, dtype="<f4")
     n = len(ranges)
-    layout = s.layout(("scan", n), lambda: scan_layout(s.frames.laser, n))
+    layout = s.layout(("scan", n), scan_layout, s.frames.laser, n)
     sec, ns = _stamp_ns(m.stamp)
     angle_min, step = float(m.angle_min), float(m.angle_increment)
     values = (sec, ns, angle_min, angle_min + step * max(n - 1, 0), step, 0.0, 0.0, float(m.range_min),
@@ -171,14 +171,14 @@ def scan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 
 def _odometry_bytes(layout: Layout, m: Any) -> bytes:
     p, tw = m.pose, m.twist
-    sec, ns = _stamp_ns(m.stamp)
+    sec, ns = divmod(int(round(m.stamp * 1e9)), 1_000_000_000)
     half = p.yaw / 2.0
     return layout.encode(sec, ns, float(p.x), float(p.y), 0.0, 0.0, 0.0, math.sin(half), math.cos(half),
                          float(tw.linear), 0.0, 0.0, 0.0, 0.0, float(tw.angular))
 
 
 def _tf_bytes(layout: Layout, t: float, x: float, y: float, yaw: float) -> bytes:
-    sec, ns = _stamp_ns(t)
+    sec, ns = divmod(int(round(t * 1e9)), 1_000_000_000)
     half = yaw / 2.0
     return layout.encode(sec, ns, float(x), float(y), 0.0, 0.0, 0.0, math.sin(half), math.cos(half))
 
@@ -187,8 +187,8 @@ def odom(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
     p = m.pose
     s.odom_pose = (p.x, p.y, p.yaw)
-    msg = _odometry_bytes(s.layout("odom", lambda: odometry_layout(f.odom, f.base)), m)
-    tf = _tf_bytes(s.layout("tf_odom", lambda: tf_layout(f.odom, f.base)), m.stamp, p.x, p.y, p.yaw)
+    msg = _odometry_bytes(s.layout("odom", odometry_layout, f.odom, f.base), m)
+    tf = _tf_bytes(s.layout("tf_odom", tf_layout, f.odom, f.base), m.stamp, p.x, p.y, p.yaw)
     return [(topic, "nav_msgs/msg/Odometry", msg), (s.tf_topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
@@ -203,12 +203,12 @@ def localized(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     x = p.x - (c * ox - sn * oy)
     y = p.y - (sn * ox + c * oy)
     f = s.frames
-    tf = _tf_bytes(s.layout("tf_map", lambda: tf_layout(f.map, f.odom)), m.stamp, x, y, yaw)
+    tf = _tf_bytes(s.layout("tf_map", tf_layout, f.map, f.odom), m.stamp, x, y, yaw)
     return [(topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
 def imu(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    layout = s.layout("imu", lambda: imu_layout(s.frames.imu))
+    layout = s.layout("imu", imu_layout, s.frames.imu)
     sec, ns = _stamp_ns(m.stamp)
     half = m.yaw / 2.0
     data = layout.encode(sec, ns, 0.0, 0.0, math.sin(half), math.cos(half), 0.0, 0.0, float(m.yaw_rate),
@@ -318,7 +318,7 @@ def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
 
 def odometry_like(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
-    msg = _odometry_bytes(s.layout(("odometry", topic), lambda: odometry_layout(f.map, f.base)), m)
+    msg = _odometry_bytes(s.layout(("odometry", topic), odometry_layout, f.map, f.base), m)
     return [(topic, "nav_msgs/msg/Odometry", msg)]
 
 

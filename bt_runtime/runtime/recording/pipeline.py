@@ -152,7 +152,7 @@ class RecordPipeline:
                 data = msg if type(msg) is bytes else serialize(msg, typename)
                 if bag is not None:
                     bag.count(name, t_ns)
-                logger(data, t_ns)
+                logger(data, t_ns, None)
                 if self.live is not None:
                     self.live.sent(name, t_ns, data)
                 written[name] = written.get(name, 0) + 1
