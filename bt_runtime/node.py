@@ -27,6 +27,7 @@ from typing import Any, ClassVar
 from .blackboard import Blackboard
 from .errors import BehaviorTreeException, BTRuntimeError, LogicError, NodeExecutionError
 from .ports import EMPTY, PortInfo, blackboard_key, ports_dict
+from .script import CastError, ScriptRuntimeError, to_bool
 from .status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType
 from .timers import TimerQueue, WakeUpSignal
 
@@ -1111,8 +1112,6 @@ def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig,
 
     The scripts are taken from the config now; code that changes a node's conditions later
     calls ``refresh_conditions()``, as it must for the fast paths too."""
-    from .script import CastError, ScriptRuntimeError, to_bool
-
     pre = cfg._pre or {}
     post = cfg._post or {}
     # (the script's closure, its Script for errors, the result, negate): Script.run_bool inlined

@@ -30,6 +30,7 @@ from ..ports import (
     parse_bool,
     polymorphic,
 )
+from ..script import compile_script
 from ..status import PortDirection
 from ..timers import TimerQueue, WakeUpSignal
 from ..tree import SubtreeRecord, Tree
@@ -129,8 +130,6 @@ class TreeBuilder:
                 code = attrs.get(attr)
                 if code is None:
                     continue
-                from ..script import compile_script
-
                 try:
                     target[attr] = compile_script(code)
                 except BehaviorTreeException as exc:  # BT.CPP: LogicError("Error in the script ...")
