@@ -164,6 +164,11 @@ def run(args: argparse.Namespace) -> int:
         files = write_report(result, args.report)
         drawn = f" (draws the {len(result.trajectories)} runs made now)" if result.resumed else ""
         print(f"report: {len(files)} files in {args.report}{drawn}")
+    if args.record is not None:
+        bags = sorted(p for p in args.record.iterdir() if (p / "metadata.yaml").is_file()) \
+            if args.record.is_dir() else []
+        which = " (failed runs only)" if args.record_failures else ""
+        print(f"recording: {len(bags)} bag{'' if len(bags) == 1 else 's'} in {args.record}{which}")
     return _exit_code(result.results)
 
 

@@ -24,6 +24,7 @@ def test_only_the_failed_run_keeps_its_bag(tmp_path):
     bags = sorted(p.name for p in out.iterdir())
     # the baseline (navigation alone) fails Lidar_1, the autonomy layer passes it (Table IV)
     assert len(bags) == 1 and bags[0].startswith("Lidar_1_without_seed"), bags
+    assert f"recording: 1 bag in {out} (failed runs only)" in result.stdout, result.stdout[-500:]
     with AnyReader([out / bags[0]]) as reader:
         topics = {c.topic for c in reader.connections}
         faults = [c for c in reader.connections if c.topic == "/sim/faults"]
