@@ -14,7 +14,7 @@ Our own code after opennav_docking's sequence (nav2_docking, Jazzy and later):
   4. INITIAL_PERCEPTION: the dock pose is the database's (no detector, as SimpleChargingDock
      without external detection);
   5. CONTROLLING: a slow approach along the dock's axis from the robot's localized pose, until
-     the battery reports charging or the pose is within ``docking_threshold`` of the dock;
+     the battery reports charging or the pose is ``docking_threshold`` past the dock pose;
      overshoot or ``dock_approach_timeout``: 905 FAILED_TO_CONTROL;
   6. WAIT_FOR_CHARGE: the battery messages must say CHARGING (or FULL) within
      ``wait_charge_timeout``, else 906 FAILED_TO_CHARGE;
@@ -78,9 +78,11 @@ class DockingParams(BaseModel):
     dock_prestaging_tolerance: float = Field(0.5, ge=0)
     staging_x_offset: float = -0.7  # SimpleChargingDock
     # deviation: SimpleChargingDock's docking_threshold is 0.05 m (distance to the dock pose);
-    # here the approach stops when the robot is within 0.02 m of the dock's face along its axis
-    # (the stand-in's pose is AMCL-like, 2 cm sigma; the simulated contacts have 5 cm of play)
-    docking_threshold: float = Field(0.02, gt=0)
+    # here, without a charging report first, the approach stops once the localized pose is
+    # ``docking_threshold`` past the dock pose along its axis, pressing the spring-loaded
+    # contacts (the stand-in's pose is AMCL-like, 2 cm sigma, and the robot stops a little
+    # behind it; the simulated contacts have 5 cm of play either way)
+    docking_threshold: float = Field(0.01, ge=0)
     approach_speed: float = Field(0.1, gt=0)  # m/s, the final approach (graceful controller's v_linear_max 0.24 slowed near)
     undock_speed: float = Field(0.1, gt=0)  # m/s backwards
 
@@ -236,7 +238,7 @@ class DockingServer:
             pose = self._robot_pose()
             dx, dy = pose.x - dock.x, pose.y - dock.y
             along = c * dx + s * dy  # < 0 before the dock
-            if along >= -p.docking_threshold:  # at the dock's face (whether contacts touch, the battery tells)
+            if along >= p.docking_threshold:  # on the contacts (whether they touch, the battery tells)
                 break
             if along > 0.1:
                 raise _Failed(FAILED_TO_CONTROL, f"passed the dock by {along:.3f} m without contact")
