@@ -273,6 +273,7 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
             hint = ("the tree is waiting for a goal: pass --goal X,Y[,YAW] (metres, radians)"
                     + (f" or a goal name ({', '.join(sorted(world.goals))})" if world is not None and world.goals
                        else ""))
+            hint += _goal_serving_hint(runtime.driver)
             held["notes"].append(hint)
             _say(console, hint)
         await asyncio.shield(runtime.completed)
@@ -294,6 +295,18 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
         await monitoring.stop()
         if recording.enabled:
             held["summary"].recording = recording.stop()
+
+
+def _goal_serving_hint(driver) -> str:
+    """Where a ROS 2 client can send goals (--driver ros2), for the waiting-for-a-goal hint."""
+    goals = getattr(getattr(driver, "config", None), "goals", None)
+    if goals is None or not goals.enabled:
+        return ""
+    ns = driver.config.namespace.strip("/")
+    names = [f"{name} ({kind})" for name, kind in ((goals.action, "NavigateToPose action"),
+                                                   (goals.topic, "PoseStamped, RViz's 2D Goal Pose")) if name]
+    return "; or send one to " + " or ".join(n if n.startswith("/") else f"/{ns + '/' if ns else ''}{n}"
+                                             for n in names)
 
 
 def _say(console: SharedConsole | None, text: str) -> None:

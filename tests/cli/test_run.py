@@ -120,3 +120,17 @@ def test_a_groot2_project_file_runs(tmp_path, capsys):
     assert "pick the tree to run with --tree ID (trees: MainTree, Other)" in capsys.readouterr().err
     code, data = _run(tmp_path, str(project), "--tree", "Other")
     assert code == 0 and data["status"] == "SUCCESS"
+
+
+def test_waiting_hint_names_the_ros2_goal_action_and_topic():
+    from types import SimpleNamespace
+
+    from bt_runtime.cli.run import _goal_serving_hint
+    from bt_runtime.runtime.ros2.config import Ros2Config
+
+    hint = _goal_serving_hint(SimpleNamespace(config=Ros2Config(namespace="/robot1")))
+    assert "/robot1/autonomy/navigate_to_pose (NavigateToPose action)" in hint
+    assert "/robot1/autonomy/goal_pose (PoseStamped" in hint
+    off = Ros2Config.model_validate({"goals": {"topic": None}})
+    assert "goal_pose" not in _goal_serving_hint(SimpleNamespace(config=off))
+    assert _goal_serving_hint(SimpleNamespace()) == ""  # the simulator serves no goal topics
