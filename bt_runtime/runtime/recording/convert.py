@@ -216,6 +216,15 @@ def imu(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     return [(topic, "sensor_msgs/msg/Imu", data)]
 
 
+def _supply_status(m: Any) -> int:
+    """The monitor's own status (charging, full on the dock...); a reading without one is
+    judged from its current, as before: drawing current = discharging."""
+    status = int(getattr(m, "power_supply_status", 0) or 0)
+    if status:
+        return status
+    return 2 if m.current > 0 else 0  # DISCHARGING / UNKNOWN
+
+
 def battery(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     nan = math.nan
     msg = BatteryState(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.base), voltage=float(m.voltage),
@@ -223,7 +232,7 @@ def battery(s: ConvertState, topic: str, t: float, m: Any) -> Output:
                        capacity=float(m.capacity_ah) if m.capacity_ah else nan,
                        design_capacity=float(m.capacity_ah) if m.capacity_ah else nan,
                        percentage=float(m.percentage) / 100.0,
-                       power_supply_status=2 if m.current > 0 else 0,  # DISCHARGING / UNKNOWN
+                       power_supply_status=_supply_status(m),
                        power_supply_health=0, power_supply_technology=0, present=True,
                        cell_voltage=EMPTY32, cell_temperature=EMPTY32, location="", serial_number="")
     return [(topic, "sensor_msgs/msg/BatteryState", msg)]

@@ -67,3 +67,17 @@ def test_the_recording_store_makes_only_the_cdr_serializer_and_still_reads_back(
     data = types.serialize(log, "rcl_interfaces/msg/Log")
     assert data == jazzy.serialize_cdr(jazzy.deserialize_cdr(data, "rcl_interfaces/msg/Log"), "rcl_interfaces/msg/Log")
     assert store.get_msgdef("rcl_interfaces/msg/Log").size_ros1 == jazzy.get_msgdef("rcl_interfaces/msg/Log").size_ros1
+
+
+def test_battery_keeps_the_monitors_charging_status():
+    """A robot on its dock is recorded CHARGING (as its monitor said), not judged from the current."""
+    from bt_runtime.runtime.messages import POWER_SUPPLY_CHARGING, BatteryState
+
+    state = convert.ConvertState()
+
+    def status(msg: BatteryState) -> int:
+        (_, _, out), = convert.battery(state, "/battery_state", 1.0, msg)
+        return out.power_supply_status
+
+    assert status(BatteryState(1.0, 12.0, 40.0, current=-2.0, power_supply_status=POWER_SUPPLY_CHARGING)) == 1
+    assert status(BatteryState(1.0, 12.0, 40.0, current=1.5)) == 2  # no status given: drawing current
