@@ -285,6 +285,10 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
         pass
     finally:
         mark_unfinished(outcomes, runtime, witness, args.duration)
+        client_notes = client_goal_notes(runtime.goals)
+        if client_notes:  # goals from ROS clients: the summary says what became of them, not "waiting"
+            held["notes"][:] = [n for n in held["notes"] if not n.startswith("the tree is waiting for a goal")]
+            held["notes"].extend(client_notes)
         if progress_task is not None:
             progress_task.cancel()
             progress.maybe_print()
@@ -295,6 +299,18 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
         await monitoring.stop()
         if recording.enabled:
             held["summary"].recording = recording.stop()
+
+
+def client_goal_notes(intake) -> list[str]:
+    """One line per goal from a ROS client (the NavigateToPose action, the goal topic) with its
+    outcome; --goal's goals (``runtime.send_goal``, source "api") have summary lines of their own."""
+    handles = [*intake.finished, *([intake.current] if intake.current is not None else []), *intake.queue]
+    lines = []
+    for h in sorted((h for h in handles if h.source != "api"), key=lambda h: h.id):
+        r = h.result
+        outcome = "not finished" if r is None else r.outcome + (f": {r.error_msg}" if r.error_msg else "")
+        lines.append(f"goal from {h.source} ({h.pose.x:.2f}, {h.pose.y:.2f}, yaw {h.pose.yaw:.2f} rad): {outcome}")
+    return lines
 
 
 def _goal_serving_hint(driver) -> str:

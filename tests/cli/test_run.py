@@ -134,3 +134,24 @@ def test_waiting_hint_names_the_ros2_goal_action_and_topic():
     off = Ros2Config.model_validate({"goals": {"topic": None}})
     assert "goal_pose" not in _goal_serving_hint(SimpleNamespace(config=off))
     assert _goal_serving_hint(SimpleNamespace()) == ""  # the simulator serves no goal topics
+
+
+def test_goals_from_ros_clients_get_a_summary_line_each():
+    from types import SimpleNamespace
+
+    from bt_runtime.cli.run import client_goal_notes
+    from bt_runtime.runtime.goal_intake import GoalResult
+
+    def handle(i, source, result):
+        return SimpleNamespace(id=i, source=source, pose=SimpleNamespace(x=-1.0, y=-2.0, yaw=0.0), result=result)
+
+    cli = handle(1, "api", GoalResult("SUCCEEDED", "SUCCEEDED"))
+    done = handle(2, "topic", GoalResult("SUCCEEDED", "SUCCEEDED"))
+    failed = handle(3, "action", GoalResult("ABORTED", "ABORTED", 204, "goal outside the map"))
+    running = handle(4, "action", None)
+    intake = SimpleNamespace(finished=[cli, failed, done], current=running, queue=[])
+    assert client_goal_notes(intake) == [
+        "goal from topic (-1.00, -2.00, yaw 0.00 rad): SUCCEEDED",
+        "goal from action (-1.00, -2.00, yaw 0.00 rad): ABORTED: goal outside the map",
+        "goal from action (-1.00, -2.00, yaw 0.00 rad): not finished"]
+    assert client_goal_notes(SimpleNamespace(finished=[cli], current=None, queue=[])) == []
