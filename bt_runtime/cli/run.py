@@ -176,10 +176,28 @@ def _robot_has_bumper(robot: str) -> bool:
         return True
 
 
+def _robot_section(robot: str) -> dict | None:
+    """The ROS 2 config's ``robot:`` section (size, limits, power model, lidar mount) from the
+    robot profile named on the command line, or None if it cannot be read."""
+    try:
+        from sim.robot import load_profile
+
+        p = load_profile(robot)
+    except Exception:  # a profile we cannot read: the config's own section stays
+        return None
+    b = p.battery
+    return {"radius": p.radius, "max_linear": p.max_linear, "max_angular": p.max_angular,
+            "max_linear_accel": p.max_linear_accel, "max_angular_accel": p.max_angular_accel,
+            "capacity_ah": b.capacity_ah, "voltage_nominal": (b.voltage_full + b.voltage_empty) / 2,
+            "idle_power_w": b.idle_power_w, "k_linear": b.k_linear, "k_angular": b.k_angular,
+            "lidar_x": p.lidar.x, "lidar_y": p.lidar.y}
+
+
 def make_driver(args: argparse.Namespace):
     if args.driver == "ros2":
         try:
             from ..runtime.ros2 import Ros2Config, Ros2Driver  # provided by the [ros2] extra
+            from ..runtime.ros2.config import RobotConfig
         except ImportError as exc:
             raise UsageError(f"--driver ros2 needs the [ros2] extra (pip install -e '.[ros2]'): {exc}") from None
         path = getattr(args, "ros2_config", None)
@@ -189,8 +207,12 @@ def make_driver(args: argparse.Namespace):
             raise UsageError(str(exc)) from None
         if getattr(args, "loopback", False):
             config.loopback_only = True
-        if not _robot_has_bumper(getattr(args, "robot", "burger")):
+        robot = getattr(args, "robot", "burger")
+        if not _robot_has_bumper(robot):
             config = config.without_components("bumper")  # e.g. the ROSbot 2.0 senses contacts by IMU
+        section = _robot_section(robot) if "robot" not in config.model_fields_set else None
+        if section is not None:  # --robot sizes the layer (limits, footprint, zones) unless the file does
+            config = config.model_copy(update={"robot": type(config.robot or RobotConfig())(**section)})
         return Ros2Driver(config.with_environment())
     from sim.driver import SimDriver
 

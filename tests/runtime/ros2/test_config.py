@@ -56,6 +56,24 @@ def test_config_file_and_cli_driver(tmp_path, monkeypatch):
         make_driver(argparse.Namespace(driver="ros2", ros2_config=tmp_path / "bad.yaml"))
 
 
+def test_robot_on_the_command_line_sizes_the_layer_unless_the_file_does(tmp_path):
+    """`run --driver ros2 --robot rosbot2` gets the ROSbot's footprint and limits (the gate's
+    clamps and the safety zones use them), not the burger defaults; a file's robot: section wins."""
+    from bt_runtime.cli.run import make_driver
+    from sim.robot import load_profile
+
+    rosbot = load_profile("rosbot2")
+    info = make_driver(argparse.Namespace(driver="ros2", ros2_config=None, robot="rosbot2")).robot_info()
+    assert (info.radius, info.max_linear, info.max_angular) == (rosbot.radius, rosbot.max_linear, rosbot.max_angular)
+    assert info.capacity_ah == rosbot.battery.capacity_ah and info.lidar_x == rosbot.lidar.x
+    path = tmp_path / "robot.yaml"
+    path.write_text(CONFIG)
+    waffle = load_profile("waffle")
+    assert (waffle.radius, waffle.max_linear) != (0.155, 0.9)
+    info = make_driver(argparse.Namespace(driver="ros2", ros2_config=path, robot="waffle")).robot_info()
+    assert (info.radius, info.max_linear) == (0.155, 0.9)  # the file's section
+
+
 def test_config_errors_name_the_file_and_field(tmp_path):
     path = tmp_path / "bad.yaml"
     path.write_text("topics:\n  scan: {name: scan, qos: {reliability: maybe}}\n")
