@@ -84,9 +84,16 @@ def _finish(out: GoalOutcome, outcome: str, runtime: Any, witness: Any, message:
         return
     parts = [] if message in GENERIC else [message]
     if out.sent_at is not None:  # it reached the tree: what went wrong there
-        parts.append(witness.reason(since=out.sent_at))
         why = witness.to_dict(since=out.sent_at)
         out.failing_node, out.navigation_error = why["failing_node"], why["navigation_error"]
+        if outcome == "REFUSED" and parts:
+            # the tree decided and said why; the last failing leaf is one of its routine guards
+            out.failing_node = None
+            nav = witness.last_nav_error(since=out.sent_at)
+            if nav is not None:
+                parts.append(nav.describe())
+        else:
+            parts.append(witness.reason(since=out.sent_at))
     out.reason = "; ".join(parts)
 
 

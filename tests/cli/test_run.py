@@ -47,6 +47,8 @@ def test_a_goal_outside_the_map_exits_1_and_says_why(tmp_path, capsys):
     assert goal["reason"].startswith("refused: GOAL_OUTSIDE_MAP (204)")
     assert goal["navigation_error"]["code"] == 204 and goal["navigation_error"]["code_name"] == "GOAL_OUTSIDE_MAP"
     assert "GOAL_OUTSIDE_MAP (204)" in goal["reason"]
+    # the tree said why; a routine guard that failed on the way is not offered as the cause
+    assert goal["failing_node"] is None and "last failing node" not in goal["reason"]
     assert printed.startswith("result: FAILED (goal 0 REFUSED)")
 
 
