@@ -79,6 +79,22 @@ async def wait_until(predicate, timeout: float, what: str) -> None:
 
 # --- a tree that ignores obstacles (the safety-zone tests: the gate's zones must stop it) -----
 
+# one collision_monitor stop zone 0.3 m ahead of the base (the safety-zone tests in the
+# simulator and over DDS)
+STOP_ZONE_YAML = """\
+collision_monitor:
+  ros__parameters:
+    source_timeout: 1.0
+    polygons: ["PolygonStop"]
+    PolygonStop:
+      type: "polygon"
+      points: "[[0.3, 0.12], [0.3, -0.12], [0.0, -0.12], [0.0, 0.12]]"
+      action_type: "stop"
+      min_points: 4
+    observation_sources: ["scan"]
+    scan: {type: "scan", topic: "scan"}
+"""
+
 BLIND_TREE = tree_xml("""
   <Parallel success_count="-1" failure_count="1">
     <KeepRunningUntilFailure><DriveBlindly speed="0.22"/></KeepRunningUntilFailure>

@@ -9,23 +9,10 @@ import math
 
 from bt_runtime.runtime.config import RuntimeConfig, SafetyZonesSettings
 from bt_runtime.runtime.safety_zones import STREAM
-from tests.helpers import BLIND_TREE, register_blind_driving
+from tests.helpers import BLIND_TREE, STOP_ZONE_YAML, register_blind_driving
 
 SPAWN = (-2.0, -2.0, math.pi / 2)  # the apartment: a wall 1.75 m ahead
 
-STOP_ONLY = """\
-collision_monitor:
-  ros__parameters:
-    source_timeout: 1.0
-    polygons: ["PolygonStop"]
-    PolygonStop:
-      type: "polygon"
-      points: "[[0.3, 0.12], [0.3, -0.12], [0.0, -0.12], [0.0, 0.12]]"
-      action_type: "stop"
-      min_points: 4
-    observation_sources: ["scan"]
-    scan: {type: "scan", topic: "scan"}
-"""
 
 
 def clearance(rt) -> float:
@@ -46,7 +33,7 @@ async def drive(runtime, settings: SafetyZonesSettings, seconds=14.0):
 
 async def test_a_stop_zone_halts_a_blind_tree_before_the_wall(runtime, tmp_path):
     path = tmp_path / "stop.yaml"
-    path.write_text(STOP_ONLY)
+    path.write_text(STOP_ZONE_YAML)
     rt, gap, bb = await drive(runtime, SafetyZonesSettings(file=str(path)))
     assert gap > 0.02, f"the robot ended {gap:.3f} m from the wall"
     assert rt.safety_zones.state.zone == "PolygonStop"
