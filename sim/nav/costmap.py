@@ -322,6 +322,8 @@ class GlobalCostmap(Costmap2D):
             self.last_update_time = now
         if not self.params.use_obstacle_layer:
             return False
+        if not (math.isfinite(pose.x) and math.isfinite(pose.y) and math.isfinite(pose.yaw)):
+            return False  # no valid transform for this scan (a corrupt localization): as Nav2, skip it
         x0, y0, cos, sin, r, clear_len, mark = _scan_geometry(
             scan, pose, self.laser_offset, self.params, self._rays)
         flat = self.obstacle.reshape(-1)

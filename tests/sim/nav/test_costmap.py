@@ -82,6 +82,17 @@ def test_obstacle_layer_marks_and_raytrace_clears():
     assert not cm.cost.any()
 
 
+def test_a_nan_pose_marks_nothing_and_warns_nothing():
+    """A corrupt localization (NaN pose) must not put casts of NaN into cell indices."""
+    import warnings
+
+    cm = GlobalCostmap(empty_grid(), 0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cm.update_from_scan(scan({0: 1.0, 90: 1.5}), Pose2D(math.nan, 3.0, 0.0))
+    assert not (cm.cost == LETHAL).any()
+
+
 def test_raytrace_clears_unknown_space():
     grid = empty_grid()
     grid.data[:, 60:] = -1  # unknown beyond x = 3
