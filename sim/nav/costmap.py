@@ -466,6 +466,8 @@ class LocalCostmap(Costmap2D):
         """Move the window to ``pose``, apply ``scan`` (if any), recompose and re-inflate."""
         if now is not None:
             self.last_update_time = now
+        if not (math.isfinite(pose.x) and math.isfinite(pose.y) and math.isfinite(pose.yaw)):
+            return  # no valid transform (a corrupt localization): the window stays where it was
         self._place(pose.x, pose.y)
         if scan is not None and self.params.use_obstacle_layer:
             x0, y0, cos, sin, r, clear_len, mark = _scan_geometry(

@@ -90,7 +90,11 @@ def test_a_nan_pose_marks_nothing_and_warns_nothing():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         cm.update_from_scan(scan({0: 1.0, 90: 1.5}), Pose2D(math.nan, 3.0, 0.0))
+        local = LocalCostmap(GlobalCostmap(empty_grid(), 0.1), 0.1)
+        local.update(Pose2D(2.0, 3.0, 0.0), scan({0: 1.0}))
+        local.update(Pose2D(2.0, math.nan, 0.0), scan({90: 1.5}))
     assert not (cm.cost == LETHAL).any()
+    assert local.cost_at(3.0, 3.0) == LETHAL  # what it had before the bad pose stays
 
 
 def test_raytrace_clears_unknown_space():
