@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from PIL import Image
 
 from bt_runtime.__main__ import main
@@ -126,6 +127,8 @@ def test_a_groot2_project_file_runs(tmp_path, capsys):
 
 def test_waiting_hint_names_the_ros2_goal_action_and_topic():
     from types import SimpleNamespace
+
+    pytest.importorskip("cyclonedds")  # the ros2 extra: the README's '.[dev]' install has none
 
     from bt_runtime.cli.run import _goal_serving_hint
     from bt_runtime.runtime.ros2.config import Ros2Config
