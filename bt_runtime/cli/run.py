@@ -166,25 +166,19 @@ def with_collision_monitor(config, choice: str | None):
     return config
 
 
-def _robot_has_bumper(robot: str) -> bool:
-    """Does the robot profile named on the command line have a bumper? (True if unknown.)"""
+def _profile(robot: str):
+    """The robot profile named on the command line, or None if it cannot be read (then the
+    ROS 2 config's own components and robot section stay as they are)."""
     try:
         from sim.robot import load_profile
 
-        return load_profile(robot).bumper is not None
-    except Exception:  # a profile we cannot read: keep the configured components
-        return True
-
-
-def _robot_section(robot: str) -> dict | None:
-    """The ROS 2 config's ``robot:`` section (size, limits, power model, lidar mount) from the
-    robot profile named on the command line, or None if it cannot be read."""
-    try:
-        from sim.robot import load_profile
-
-        p = load_profile(robot)
-    except Exception:  # a profile we cannot read: the config's own section stays
+        return load_profile(robot)
+    except Exception:
         return None
+
+
+def _robot_section(p) -> dict:
+    """The ROS 2 config's ``robot:`` section (size, limits, power model, lidar mount) from a profile."""
     b = p.battery
     return {"radius": p.radius, "max_linear": p.max_linear, "max_angular": p.max_angular,
             "max_linear_accel": p.max_linear_accel, "max_angular_accel": p.max_angular_accel,
@@ -207,12 +201,12 @@ def make_driver(args: argparse.Namespace):
             raise UsageError(str(exc)) from None
         if getattr(args, "loopback", False):
             config.loopback_only = True
-        robot = getattr(args, "robot", "burger")
-        if not _robot_has_bumper(robot):
+        profile = _profile(getattr(args, "robot", "burger"))
+        if profile is not None and profile.bumper is None:
             config = config.without_components("bumper")  # e.g. the ROSbot 2.0 senses contacts by IMU
-        section = _robot_section(robot) if "robot" not in config.model_fields_set else None
-        if section is not None:  # --robot sizes the layer (limits, footprint, zones) unless the file does
-            config = config.model_copy(update={"robot": type(config.robot or RobotConfig())(**section)})
+        if profile is not None and "robot" not in config.model_fields_set:
+            # --robot sizes the layer (limits, footprint, zones) unless the file does
+            config = config.model_copy(update={"robot": RobotConfig(**_robot_section(profile))})
         return Ros2Driver(config.with_environment())
     from sim.driver import SimDriver
 

@@ -11,7 +11,7 @@ import asyncio
 from typing import Any
 
 from ..runtime.messages import Pose2D
-from .summary import ABORTED, FROM_TREE_STATUS, NOT_FINISHED, NOT_STARTED, SUCCEEDED, GoalOutcome
+from .summary import ABORTED, FROM_TREE_STATUS, NOT_FINISHED, NOT_STARTED, REFUSED, SUCCEEDED, GoalOutcome
 
 
 def uses_goal_handoff(tree: Any) -> bool:
@@ -86,7 +86,7 @@ def _finish(out: GoalOutcome, outcome: str, runtime: Any, witness: Any, message:
     if out.sent_at is not None:  # it reached the tree: what went wrong there
         why = witness.to_dict(since=out.sent_at)
         out.failing_node, out.navigation_error = why["failing_node"], why["navigation_error"]
-        if outcome == "REFUSED" and parts:
+        if outcome == REFUSED and parts:
             # the tree decided and said why; the last failing leaf is one of its routine guards
             out.failing_node = None
             nav = witness.last_nav_error(since=out.sent_at)

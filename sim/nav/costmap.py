@@ -108,6 +108,11 @@ class _Rays:
         return self._angles
 
 
+def _finite(pose: Pose2D) -> bool:
+    """A pose a scan can be placed with (a corrupt localization gives NaN)."""
+    return math.isfinite(pose.x) and math.isfinite(pose.y) and math.isfinite(pose.yaw)
+
+
 def _scan_geometry(scan: LaserScan, pose: Pose2D, laser_offset, params: CostmapParams, rays: _Rays):
     """World-frame origin, beam directions, clearing lengths and marking mask of a scan."""
     ox_l, oy_l, oyaw_l = laser_offset
@@ -322,7 +327,7 @@ class GlobalCostmap(Costmap2D):
             self.last_update_time = now
         if not self.params.use_obstacle_layer:
             return False
-        if not (math.isfinite(pose.x) and math.isfinite(pose.y) and math.isfinite(pose.yaw)):
+        if not _finite(pose):
             return False  # no valid transform for this scan (a corrupt localization): as Nav2, skip it
         x0, y0, cos, sin, r, clear_len, mark = _scan_geometry(
             scan, pose, self.laser_offset, self.params, self._rays)
@@ -466,7 +471,7 @@ class LocalCostmap(Costmap2D):
         """Move the window to ``pose``, apply ``scan`` (if any), recompose and re-inflate."""
         if now is not None:
             self.last_update_time = now
-        if not (math.isfinite(pose.x) and math.isfinite(pose.y) and math.isfinite(pose.yaw)):
+        if not _finite(pose):
             return  # no valid transform (a corrupt localization): the window stays where it was
         self._place(pose.x, pose.y)
         if scan is not None and self.params.use_obstacle_layer:

@@ -149,9 +149,6 @@ def _read_image(path: Path, yaml_path: Path) -> np.ndarray:
         raise
     except (UnidentifiedImageError, OSError, ValueError) as err:
         raise MapFileError(yaml_path, "image", f"cannot read {path}: {err}") from None
-    if pixels.size > MAX_CELLS:
-        raise MapFileError(yaml_path, "image", f"{pixels.shape[1]} x {pixels.shape[0]} pixels is more than "
-                                               f"{MAX_CELLS} cells")
     return pixels
 
 
