@@ -97,11 +97,16 @@ def register(factory):
         factory.register_node_type(cls, cls.__name__)
 
 
+# a restart is not the end of the mission: after it the tree goes back to its goal (a lidar that
+# has not reported yet at the first tick is UNKNOWN, not OK, and gets a restart too; the tree
+# must not end there, or the robot never moves)
 LIDAR_TREE = """<root BTCPP_format="4"><BehaviorTree ID="Main">
-  <ReactiveFallback>
-    <ReactiveSequence><LidarHealthy/><NavigateToGoal/></ReactiveSequence>
-    <RestartLidar/>
-  </ReactiveFallback>
+  <RetryUntilSuccessful num_attempts="10">
+    <ReactiveFallback>
+      <ReactiveSequence><LidarHealthy/><NavigateToGoal/></ReactiveSequence>
+      <Sequence><RestartLidar/><AlwaysFailure/></Sequence>
+    </ReactiveFallback>
+  </RetryUntilSuccessful>
 </BehaviorTree></root>"""
 
 
