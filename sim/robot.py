@@ -19,6 +19,8 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from bt_runtime.yaml_files import safe_load
+
 from .world import format_validation_error
 
 ROBOTS_DIR = Path(__file__).parent / "robots"
@@ -200,7 +202,6 @@ def _merge(base: dict, over: dict) -> dict:
     return out
 
 
-_YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser when present
 _PARSED: dict[tuple[str, int, int], Any] = {}  # (path, mtime_ns, size) -> parsed YAML
 
 
@@ -211,7 +212,7 @@ def _parsed_profile(path: Path) -> Any:
     key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
     if key not in _PARSED:
         try:
-            data = yaml.load(path.read_text(), Loader=_YAML_LOADER)  # noqa: S506 (a safe loader)
+            data = safe_load(path.read_text())
         except yaml.YAMLError as err:
             raise ProfileError(f"{path}: not valid YAML: {err}") from None
         if len(_PARSED) >= 16:

@@ -31,6 +31,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from bt_runtime.runtime.messages import Pose2D
+from bt_runtime.yaml_files import safe_load
 
 from .geometry import (
     Raster,
@@ -325,7 +326,6 @@ def world_from_dict(data: dict, source: str = "<dict>") -> World:
         raise WorldError(format_validation_error(source, err)) from None
 
 
-_YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser when present: ~5x faster
 _LOADED: dict[tuple[str, int, int], World] = {}  # (path, mtime_ns, size) -> validated world
 _LOADED_MAX = 16
 
@@ -345,7 +345,7 @@ def load_world(name_or_path: str | Path) -> World:
     world = _LOADED.get(key)
     if world is None:
         try:
-            data = yaml.load(path.read_text(), Loader=_YAML_LOADER)  # noqa: S506 (a safe loader)
+            data = safe_load(path.read_text())
         except yaml.YAMLError as err:
             raise WorldError(f"{path}: not valid YAML: {err}") from None
         if not isinstance(data, dict):

@@ -23,6 +23,8 @@ import structlog
 import yaml
 from PIL import Image, UnidentifiedImageError
 
+from bt_runtime.yaml_files import safe_load
+
 log = structlog.get_logger("sim.nav.map_file")
 
 FREE = 0
@@ -67,7 +69,7 @@ def read_map(yaml_path: str | Path, meta: dict | None = None) -> MapFile:
     yaml_path = Path(yaml_path)
     if meta is None:
         try:
-            meta = yaml.load(yaml_path.read_text(), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+            meta = safe_load(yaml_path.read_text())
         except (OSError, yaml.YAMLError) as err:
             raise MapFileError(yaml_path, "(file)", f"not a readable map YAML: {err}") from None
     if not isinstance(meta, dict):
