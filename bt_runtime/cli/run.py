@@ -400,13 +400,19 @@ def run(args: argparse.Namespace) -> int:
     return report(args, held, interrupted)
 
 
+def notes_to_print(notes: list[str], result) -> list[str]:
+    """The run's notes less those the result line already says (a refused bring-up was
+    printed on the result line and again as a note)."""
+    return [n for n in notes if n not in result.reasons]
+
+
 def report(args: argparse.Namespace, held: dict[str, Any], interrupted: bool) -> int:
     """Print the summary, write --summary-json and --png; the exit code."""
     runtime, summary, goals = held["runtime"], held["summary"], held["goals"]
     last_error = _last_error(runtime)
     result = verdict(summary, goals, last_error, interrupted)
     summary.goal_outcomes = [g.outcome for g in goals]
-    extra = list(held["notes"])
+    extra = notes_to_print(held["notes"], result)
     if summary.tick_errors:
         why = held["witness"]
         extra.append(f"tick errors: {summary.tick_errors}"

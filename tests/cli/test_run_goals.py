@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import pytest
 
+from bt_runtime.cli.run import notes_to_print
 from bt_runtime.cli.run_goals import mark_unfinished, outcomes_for, send_goals
 from bt_runtime.cli.summary import EXIT_FAILED, verdict
 from bt_runtime.runtime.explain import FailureWitness
@@ -51,6 +52,9 @@ def test_a_failed_bring_up_fails_the_run_with_the_node_named():
     result = verdict(summary, [], None)
     assert result.code == EXIT_FAILED
     assert result.reasons == ["bring-up failed: planner_server: activate refused; the node is inactive"]
+    # the note that says the same is not printed a second time under the result line
+    notes = ["bring-up failed: planner_server: activate refused; the node is inactive", "picture: run.png"]
+    assert notes_to_print(notes, result) == ["picture: run.png"]
 
 
 async def _until(predicate) -> None:
