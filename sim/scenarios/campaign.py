@@ -10,7 +10,6 @@ The plan is a list of self-contained run specs (runspec.py) that a backend execu
 
 from __future__ import annotations
 
-import collections
 import re
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -76,13 +75,29 @@ class CampaignResult:
 
 
 def failure_reasons(runs: list[dict[str, Any]]) -> dict[str, int]:
-    """How often each failing criterion's reason appears (numbers replaced so they group)."""
-    counter: collections.Counter[str] = collections.Counter()
+    """How often each failing criterion's reason appears. Reasons that differ only in their
+    numbers group together, and each number reads as the range seen ("crashed at 2.1..3.4 s")."""
+    groups: dict[str, tuple[str, list[list[str]]]] = {}  # pattern -> (first reason, numbers of each)
     for r in runs:
         for v in r["verdicts"]:
             if not v["passed"]:
-                counter[f"{v['criterion']}: {_NUMBER.sub('#', v['reason'])}"] += 1
-    return dict(counter.most_common())
+                text = f"{v['criterion']}: {v['reason']}"
+                first, numbers = groups.setdefault(_NUMBER.sub("#", text), (text, []))
+                numbers.append([m.group(0) for m in _NUMBER.finditer(text)])
+    counted = sorted(groups.values(), key=lambda item: -len(item[1]))  # stable: first seen first among equals
+    return {_with_ranges(first, numbers): len(numbers) for first, numbers in counted}
+
+
+def _with_ranges(first: str, numbers: list[list[str]]) -> str:
+    """``first`` with its k-th number replaced by the value, or the min..max, seen there in all."""
+    position = iter(range(len(numbers[0])))
+
+    def ranged(match: re.Match) -> str:
+        k = next(position)
+        seen = sorted({run[k] for run in numbers}, key=float)
+        return seen[0] if len(seen) == 1 else f"{seen[0]}..{seen[-1]}"
+
+    return _NUMBER.sub(ranged, first)
 
 
 def run_campaign(runs: Sequence[RunSpec], backend: Backend, *, specs: Sequence[ScenarioSpec] | None = None,
