@@ -42,6 +42,10 @@ class CmdVelConfig(_Model):
                                              "enable_stamped_cmd_vel) instead of Twist")
     frame_id: str = "base_link"
     qos: Qos = Field(default_factory=lambda: Qos(reliability="reliable", depth=10))
+    zero_repeat_period: float = Field(
+        0.1, ge=0, description="a zero that repeats the last command written (the base stands) goes on the "
+                               "wire at most this often (s); any other command, and the first zero, at once. "
+                               "0: every command the gate sends (100 Hz while ticking)")
 
 
 class NavCmdVelConfig(TopicConfig):

@@ -82,6 +82,8 @@ class Ros2Driver:
         self._restarting: set[str] = set()
         self._poller: asyncio.Task | None = None
         self.sent = 0
+        self.zeros_held = 0  # repeated zeros not written (config.topics.cmd_vel.zero_repeat_period)
+        self._zero_written_at: float | None = None  # time.monotonic() of the last zero on the wire
         self._diagnostics_writer: Any = None
         self._zone_state_writer: Any = None
         self.send_errors = 0
@@ -291,6 +293,17 @@ class Ros2Driver:
         return unsubscribe
 
     def send_velocity(self, linear: float, angular: float) -> None:
+        """Write the command; a zero repeating the last one written within
+        ``zero_repeat_period`` stays off the wire (a standing base needs no 100 Hz stream of
+        zeros; writing them was a third of an idle runtime's CPU), but is still announced on
+        ``cmd_vel_out``: the command in force is zero either way."""
+        if linear == 0.0 and angular == 0.0:
+            written = self._zero_written_at
+            if written is not None and time.monotonic() - written < self.config.topics.cmd_vel.zero_repeat_period:
+                self.zeros_held += 1
+                for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
+                    callback(Twist(0.0, 0.0))
+                return
         if self._write_cmd(linear, angular):
             for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
                 callback(Twist(float(linear), float(angular)))
@@ -344,6 +357,7 @@ class Ros2Driver:
             else:
                 writer.write(twist)
             self.sent += 1
+            self._zero_written_at = time.monotonic() if linear == 0.0 and angular == 0.0 else None
         except Exception as exc:
             self.send_errors += 1
             if self.send_errors == 1 or self.send_errors % 1000 == 0:
