@@ -117,7 +117,7 @@ class Recording:
                     self.writer.path.rmdir()
                 self.writer = None
             raise RecordingError(f"{exc}") from None
-        state = ConvertState(frames=opts.frames, tf_topic=opts.topics.tf)
+        state = ConvertState(frames=opts.frames, tf_topic=opts.topics.tf, robot_time=robot_clock(runtime.driver))
         pipeline = RecordPipeline(channels, bag=self.writer, live=self.live, state=state,
                                   queue_size=opts.queue_size, flush_interval_s=opts.flush_interval_s,
                                   latched_topics=tuple(t for t in (opts.topics.tf_static, opts.topics.map) if t))
@@ -141,6 +141,24 @@ class Recording:
                        "dropped": dict(pipeline.dropped), "errors": pipeline.errors,
                        "max_queued": pipeline.max_queued, "writer_cpu_s": round(pipeline.cpu_s, 3)}
         return self.report
+
+
+def robot_clock(driver: Any) -> Any:
+    """The driver's ``robot_time`` (loop time -> the robot's own clock, ROS time under
+    ``--driver ros2``) for the writer thread, or None when the loop clock is the robot's clock
+    (the simulator). A translation that fails keeps the loop time (the stamp of a message never
+    costs the message)."""
+    robot_time = getattr(driver, "robot_time", None)
+    if not callable(robot_time):
+        return None
+
+    def to_robot(t: float) -> float | None:
+        try:
+            return robot_time(t)
+        except Exception:  # e.g. no event loop to ask yet, from the writer thread
+            return None
+
+    return to_robot
 
 
 def format_report(report: dict[str, Any]) -> str:

@@ -93,16 +93,31 @@ class ConvertState:
     tf_topic: str = "/tf"
     odom_pose: tuple[float, float, float] | None = None  # last odom -> base_link
     layouts: dict[Any, Layout] = field(default_factory=dict)
+    # loop-clock seconds -> robot time (the driver's ``robot_time``: ROS time under --driver ros2);
+    # None: the loop clock is the robot's clock (the simulator)
+    robot_time: Callable[[float], float | None] | None = None
+
+    def robot(self, t: float) -> float:
+        """A loop-clock time as robot time, the time of every stamp and log time in a recording."""
+        to_robot = self.robot_time
+        if to_robot is None:
+            return t
+        robot = to_robot(t)
+        return t if robot is None else robot
+
+    def sec_ns(self, t: float) -> tuple[int, int]:
+        """``(sec, nanosec)`` of the robot time at loop-clock time ``t``."""
+        return divmod(int(round(self.robot(t) * 1e9)), 1_000_000_000)
+
+    def stamp(self, t: float) -> Any:
+        """builtin_interfaces/msg/Time of the robot time at loop-clock time ``t``."""
+        return Time(*self.sec_ns(t))
 
     def layout(self, key: Any, make: Callable[..., Layout], *args: Any) -> Layout:
         found = self.layouts.get(key)
         if found is None:
             found = self.layouts[key] = make(*args)
         return found
-
-
-def _stamp_ns(t: float) -> tuple[int, int]:
-    return divmod(int(round(t * 1e9)), 1_000_000_000)
 
 
 def _fields(prefix: tuple[str | int, ...], names: str, code: str = "d") -> list[tuple[tuple[str | int, ...], str]]:
@@ -161,7 +176,7 @@ def scan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     ranges = np.ascontiguousarray(m.ranges, dtype="<f4")
     n = len(ranges)
     layout = s.layout(("scan", n), scan_layout, s.frames.laser, n)
-    sec, ns = _stamp_ns(m.stamp)
+    sec, ns = s.sec_ns(m.stamp)
     angle_min, step = float(m.angle_min), float(m.angle_increment)
     values = (sec, ns, angle_min, angle_min + step * max(n - 1, 0), step, 0.0, 0.0, float(m.range_min),
               float(m.range_max))
@@ -169,16 +184,16 @@ def scan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     return [(topic, "sensor_msgs/msg/LaserScan", data)]
 
 
-def _odometry_bytes(layout: Layout, m: Any) -> bytes:
+def _odometry_bytes(s: ConvertState, layout: Layout, m: Any) -> bytes:
     p, tw = m.pose, m.twist
-    sec, ns = divmod(int(round(m.stamp * 1e9)), 1_000_000_000)
+    sec, ns = s.sec_ns(m.stamp)
     half = p.yaw / 2.0
     return layout.encode(sec, ns, float(p.x), float(p.y), 0.0, 0.0, 0.0, math.sin(half), math.cos(half),
                          float(tw.linear), 0.0, 0.0, 0.0, 0.0, float(tw.angular))
 
 
-def _tf_bytes(layout: Layout, t: float, x: float, y: float, yaw: float) -> bytes:
-    sec, ns = divmod(int(round(t * 1e9)), 1_000_000_000)
+def _tf_bytes(s: ConvertState, layout: Layout, t: float, x: float, y: float, yaw: float) -> bytes:
+    sec, ns = s.sec_ns(t)
     half = yaw / 2.0
     return layout.encode(sec, ns, float(x), float(y), 0.0, 0.0, 0.0, math.sin(half), math.cos(half))
 
@@ -187,8 +202,8 @@ def odom(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
     p = m.pose
     s.odom_pose = (p.x, p.y, p.yaw)
-    msg = _odometry_bytes(s.layout("odom", odometry_layout, f.odom, f.base), m)
-    tf = _tf_bytes(s.layout("tf_odom", tf_layout, f.odom, f.base), m.stamp, p.x, p.y, p.yaw)
+    msg = _odometry_bytes(s, s.layout("odom", odometry_layout, f.odom, f.base), m)
+    tf = _tf_bytes(s, s.layout("tf_odom", tf_layout, f.odom, f.base), m.stamp, p.x, p.y, p.yaw)
     return [(topic, "nav_msgs/msg/Odometry", msg), (s.tf_topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
@@ -203,13 +218,13 @@ def localized(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     x = p.x - (c * ox - sn * oy)
     y = p.y - (sn * ox + c * oy)
     f = s.frames
-    tf = _tf_bytes(s.layout("tf_map", tf_layout, f.map, f.odom), m.stamp, x, y, yaw)
+    tf = _tf_bytes(s, s.layout("tf_map", tf_layout, f.map, f.odom), m.stamp, x, y, yaw)
     return [(topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
 def imu(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     layout = s.layout("imu", imu_layout, s.frames.imu)
-    sec, ns = _stamp_ns(m.stamp)
+    sec, ns = s.sec_ns(m.stamp)
     half = m.yaw / 2.0
     data = layout.encode(sec, ns, 0.0, 0.0, math.sin(half), math.cos(half), 0.0, 0.0, float(m.yaw_rate),
                          float(m.accel_x), float(m.accel_y), 0.0)
@@ -227,7 +242,7 @@ def _supply_status(m: Any) -> int:
 
 def battery(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     nan = math.nan
-    msg = BatteryState(header=Header(stamp=stamp(m.stamp), frame_id=s.frames.base), voltage=float(m.voltage),
+    msg = BatteryState(header=Header(stamp=s.stamp(m.stamp), frame_id=s.frames.base), voltage=float(m.voltage),
                        temperature=nan, current=-float(m.current), charge=nan,
                        capacity=float(m.capacity_ah) if m.capacity_ah else nan,
                        design_capacity=float(m.capacity_ah) if m.capacity_ah else nan,
@@ -239,7 +254,7 @@ def battery(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 
 
 def plan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    header = Header(stamp=stamp(m.stamp), frame_id=s.frames.map)
+    header = Header(stamp=s.stamp(m.stamp), frame_id=s.frames.map)
     pts = np.asarray(m.points, dtype=np.float64)
     poses = []
     for i, row in enumerate(pts):
@@ -257,8 +272,8 @@ def plan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 def occupancy(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     h, w = m.data.shape
     ox, oy, oyaw = m.origin
-    msg = OccupancyGrid(header=Header(stamp=stamp(t), frame_id=s.frames.map),
-                        info=MapMetaData(map_load_time=stamp(t), resolution=float(m.resolution), width=int(w),
+    msg = OccupancyGrid(header=Header(stamp=s.stamp(t), frame_id=s.frames.map),
+                        info=MapMetaData(map_load_time=s.stamp(t), resolution=float(m.resolution), width=int(w),
                                          height=int(h), origin=pose(ox, oy, oyaw)),
                         data=np.ascontiguousarray(m.data, dtype=np.int8).reshape(-1))
     return [(topic, "nav_msgs/msg/OccupancyGrid", msg)]
@@ -266,7 +281,7 @@ def occupancy(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 
 def tf_static(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     x, y, yaw = m
-    tf = TFMessage(transforms=[transform(t, s.frames.base, s.frames.laser, x, y, yaw)])
+    tf = TFMessage(transforms=[transform(s.stamp(t), s.frames.base, s.frames.laser, x, y, yaw)])
     return [(topic, "tf2_msgs/msg/TFMessage", tf)]
 
 
@@ -286,9 +301,9 @@ def tree_log(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     for et, node, prev, cur in m:
         when = stamps.get(et)
         if when is None:
-            when = stamps[et] = stamp(et)
+            when = stamps[et] = s.stamp(et)
         events.append(BehaviorTreeStatusChange(when, node.name, node.config.uid & 0xFFFF, prev.name, cur.name))
-    return [(topic, "nav2_msgs/msg/BehaviorTreeLog", BehaviorTreeLog(timestamp=stamp(t), event_log=events))]
+    return [(topic, "nav2_msgs/msg/BehaviorTreeLog", BehaviorTreeLog(timestamp=s.stamp(t), event_log=events))]
 
 
 DIAG_LEVEL = {"ok": 0, "unknown": 3, "restarting": 1, "failed": 2, "dead": 2}
@@ -302,38 +317,38 @@ def diagnostics(s: ConvertState, topic: str, t: float, m: Any) -> Output:
                                        KeyValue(key="restarts", value=str(restarts)),
                                        KeyValue(key="failures", value=str(failures))])
               for name, kind, state, age, restarts, failures in m]
-    msg = DiagnosticArray(header=Header(stamp=stamp(t), frame_id=""), status=status)
+    msg = DiagnosticArray(header=Header(stamp=s.stamp(t), frame_id=""), status=status)
     return [(topic, "diagnostic_msgs/msg/DiagnosticArray", msg)]
 
 
-def log_line(t: float, level: int, name: str, text: str) -> Any:
-    return Log(stamp=stamp(t), level=level, name=name, msg=text, file="", function="", line=0)
+def log_line(s: ConvertState, t: float, level: int, name: str, text: str) -> Any:
+    return Log(stamp=s.stamp(t), level=level, name=name, msg=text, file="", function="", line=0)
 
 
 def supervisor_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
     state = e.state.value
     level = LOG_WARN if state in ("failed", "dead") else LOG_INFO
     text = f"{e.component}: {e.previous.value} -> {state}" + (f" ({e.reason})" if e.reason else "")
-    return [(topic, "rcl_interfaces/msg/Log", log_line(e.t, level, "supervisor", text))]
+    return [(topic, "rcl_interfaces/msg/Log", log_line(s, e.t, level, "supervisor", text))]
 
 
 def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
     level = LOG_WARN if e.source in ("estop", "deadman", "lock") else LOG_INFO
     text = f"{e.previous} -> {e.source}: {e.reason}"
-    return [(topic, "rcl_interfaces/msg/Log", log_line(e.t, level, "gate", text))]
+    return [(topic, "rcl_interfaces/msg/Log", log_line(s, e.t, level, "gate", text))]
 
 
 # -- hook kinds ---------------------------------------------------------------------------------
 
 def odometry_like(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
-    msg = _odometry_bytes(s.layout(("odometry", topic), odometry_layout, f.map, f.base), m)
+    msg = _odometry_bytes(s, s.layout(("odometry", topic), odometry_layout, f.map, f.base), m)
     return [(topic, "nav_msgs/msg/Odometry", msg)]
 
 
 def event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
     text = f"{e.kind} " + json.dumps(e.data, default=str, sort_keys=True)
-    return [(topic, "rcl_interfaces/msg/Log", log_line(e.t, LOG_WARN, "sim", text))]
+    return [(topic, "rcl_interfaces/msg/Log", log_line(s, e.t, LOG_WARN, "sim", text))]
 
 
 CONVERTERS: dict[str, Callable[[ConvertState, str, float, Any], Output]] = {

@@ -140,7 +140,7 @@ class RecordPipeline:
                     return
             elif bag.idle:
                 bag.open_segment()
-            t_ns = max(0, int(round(t * 1e9)))
+            t_ns = max(0, int(round(self.state.robot(t) * 1e9)))  # log time: robot time
             loggers, written = self.channels.loggers, self.written
             for name, typename, msg in CONVERTERS[kind](self.state, topic, t, payload):
                 logger = loggers.get(name)

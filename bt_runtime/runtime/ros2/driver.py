@@ -270,9 +270,9 @@ class Ros2Driver:
         """The robot's ROS time at a loop-clock time: learned from header stamps, and before the
         first stamped message the system clock (ROS time unless the robot runs on sim time)."""
         robot = self.robot_clock.to_robot(loop_time)
-        if robot is None:
-            loop = self.loop or asyncio.get_running_loop()
-            robot = loop_time + (time.time() - loop.time())
+        if robot is None:  # (from any thread: the recording's writer asks too; the loop's clock is monotonic)
+            now = self.loop.time() if self.loop is not None else time.monotonic()
+            robot = loop_time + (time.time() - now)
         return robot
 
     def dropped_counts(self) -> dict[str, int]:

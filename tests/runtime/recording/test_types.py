@@ -63,7 +63,7 @@ def test_the_recording_store_makes_only_the_cdr_serializer_and_still_reads_back(
     imu = convert.imu(state, "/imu", 1.0, Imu(2.5, 0.3, 0.1, -0.2, yaw=1.0))[0]
     back = store.deserialize_cdr(imu[2], imu[1])  # deserializer made on first use
     assert back.angular_velocity.z == 0.3 and back.header.stamp.sec == 2
-    log = convert.log_line(3.0, 20, "gate", "nav -> tree")
+    log = convert.log_line(state, 3.0, 20, "gate", "nav -> tree")
     data = types.serialize(log, "rcl_interfaces/msg/Log")
     assert data == jazzy.serialize_cdr(jazzy.deserialize_cdr(data, "rcl_interfaces/msg/Log"), "rcl_interfaces/msg/Log")
     assert store.get_msgdef("rcl_interfaces/msg/Log").size_ros1 == jazzy.get_msgdef("rcl_interfaces/msg/Log").size_ros1
