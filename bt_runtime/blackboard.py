@@ -9,6 +9,7 @@ a subtree *is* the parent's entry. Everything runs on one event loop, so there a
 from __future__ import annotations
 
 import time
+import weakref
 from collections.abc import Callable
 from typing import Any
 
@@ -59,16 +60,24 @@ def _type_mismatch(key: str, previous: PortType, current: PortType) -> LogicErro
                       f"Previously declared type [{previous.name}], current type [{current.name}]")
 
 
+# Blackboards whose look-up memory (``_resolved``) holds something: a change of structure
+# empties exactly these, so a memory is always valid and a read never checks a generation.
+_REMEMBERING: weakref.WeakSet[Blackboard] = weakref.WeakSet()
+
+
 class Blackboard:
     """A scoped key -> Entry map with a parent, subtree remappings and optional autoremap.
 
-    A key found through remapping or autoremap is remembered per blackboard, so a SubTree
-    three levels deep does not walk the chain on every read. Anything that could change what
-    a chain resolves to (a removed entry, an entry added by cloning, a new remapping) bumps
-    the class-wide ``_generation``, which empties every such memory on its next use."""
+    Every key found (local, through '@', remapping or autoremap) is remembered per blackboard
+    in ``_resolved``, so a SubTree three levels deep does not walk the chain on every read and
+    the compiled scripts read any variable with one dict look-up. Only entries that exist are
+    remembered, so a new entry needs nothing; anything that could change what a key resolves
+    to (a removed entry, entries replaced by cloning, a new remapping or autoremap setting)
+    calls ``_structure_changed``, which empties every memory at once. (Adding or removing keys
+    in the dict returned by ``local_entries()`` by hand bypasses this: use ``create_entry``,
+    ``set`` and ``unset``.)"""
 
-    __slots__ = ("_storage", "parent", "_remapping", "autoremap", "_resolved", "_resolved_gen", "__weakref__")
-    _generation = 0
+    __slots__ = ("_storage", "parent", "_remapping", "autoremap", "_resolved", "__weakref__")
 
     def __init__(self, parent: Blackboard | None = None):
         self._storage: dict[str, Entry] = {}
@@ -76,11 +85,14 @@ class Blackboard:
         self._remapping: dict[str, str] = {}
         self.autoremap = False
         self._resolved: dict[str, Entry] = {}
-        self._resolved_gen = Blackboard._generation
 
     @staticmethod
     def _structure_changed() -> None:
-        Blackboard._generation += 1
+        """Forget every remembered look-up (of every blackboard): the rare, load-time case."""
+        if _REMEMBERING:
+            for bb in list(_REMEMBERING):
+                bb._resolved.clear()
+            _REMEMBERING.clear()
 
     @classmethod
     def create(cls, parent: Blackboard | None = None) -> Blackboard:
@@ -98,8 +110,9 @@ class Blackboard:
         self._structure_changed()
 
     def enable_auto_remapping(self, enabled: bool = True) -> None:
-        self.autoremap = enabled
-        self._structure_changed()
+        if enabled != self.autoremap:
+            self.autoremap = enabled
+            self._structure_changed()
 
     @property
     def remappings(self) -> dict[str, str]:
@@ -108,29 +121,28 @@ class Blackboard:
     # -- lookup --------------------------------------------------------------------------------
     def get_entry(self, key: str) -> Entry | None:
         """Resolve ``key`` through '@', the local map, remappings and autoremap (spec 8.2)."""
-        entry = self._storage.get(key)  # local keys never start with '@'
+        resolved = self._resolved
+        entry = resolved.get(key)
         if entry is not None:
             return entry
-        if key[:1] == "@":
-            return self.root().get_entry(key[1:])
-        parent = self.parent
-        if parent is None:
-            return None
-        resolved = self._resolved
-        if self._resolved_gen != Blackboard._generation:
-            resolved.clear()
-            self._resolved_gen = Blackboard._generation
-        else:
-            entry = resolved.get(key)
-            if entry is not None:
-                return entry
-        ext = self._remapping.get(key)
-        if ext is not None:
-            entry = parent.get_entry(ext)
-        elif self.autoremap and key[:1] != "_":
-            entry = parent.get_entry(key)
-        if entry is not None:
-            resolved[key] = entry
+        entry = self._storage.get(key)  # local keys never start with '@'
+        if entry is None:
+            if key[:1] == "@":
+                entry = self.root().get_entry(key[1:])
+            else:
+                parent = self.parent
+                if parent is None:
+                    return None
+                ext = self._remapping.get(key)
+                if ext is not None:
+                    entry = parent.get_entry(ext)
+                elif self.autoremap and key[:1] != "_":
+                    entry = parent.get_entry(key)
+            if entry is None:
+                return None
+        if not resolved:
+            _REMEMBERING.add(self)
+        resolved[key] = entry
         return entry
 
     def __contains__(self, key: str) -> bool:

@@ -10,7 +10,7 @@ from itertools import repeat
 from ..errors import BTRuntimeError, LogicError
 from ..node import ConditionNode, NodeConfig, SyncActionNode, TreeNode
 from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port, type_of_value
-from ..script import compile_node_script
+from ..script import Script, compile_node_script
 from ..status import FAILURE, SUCCESS, NodeStatus
 
 
@@ -64,6 +64,29 @@ class _ScriptHolder:
         self._code_from_blackboard = isinstance(raw, str)
         self._load()
 
+    def _use_script_tick(self) -> None:
+        """Once the script is known, let parents call its one-call tick (``_bare_tick``)."""
+        if self._code_from_blackboard:
+            return
+        cfg = self.config
+        if cfg._pre or cfg._post:
+            self._select_execute_tick()
+        elif self._cell.fast is type(self).tick:
+            self._cell.fast = self._script_tick(self._script)
+
+    def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        """The script's own tick for literal code (``tick()`` while the node is being built,
+        or when the code comes from the blackboard)."""
+        try:
+            script = self._script
+        except AttributeError:  # TreeNode.__init__ runs before the script is compiled
+            return type(self).tick
+        if self._code_from_blackboard or script is None:
+            return type(self).tick
+        return self._script_tick(script)
+
+    _unbound_tick = _bare_tick
+
     def _load(self) -> None:
         try:
             text = self.get_input("code")
@@ -90,12 +113,16 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
     def __init__(self, name: str, config: NodeConfig):
         super().__init__(name, config)
         self._init_script()
+        self._use_script_tick()
 
     def tick(self) -> NodeStatus:
         if self._code_from_blackboard:
             self._load()
         self._script.run(self.config.blackboard, self.config.enums)
         return SUCCESS
+
+    def _script_tick(self, script: Script) -> Callable[[TreeNode], NodeStatus]:
+        return script.action_tick()
 
 
 class ScriptConditionNode(_ScriptHolder, ConditionNode):
@@ -112,12 +139,16 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
     def __init__(self, name: str, config: NodeConfig):
         super().__init__(name, config)
         self._init_script()
+        self._use_script_tick()
 
     def tick(self) -> NodeStatus:
         if self._code_from_blackboard:
             self._load()
         cfg = self.config
         return SUCCESS if self._script.run_bool(cfg.blackboard, cfg.enums) else FAILURE
+
+    def _script_tick(self, script: Script) -> Callable[[TreeNode], NodeStatus]:
+        return script.condition_tick()
 
 
 class SetBlackboardNode(SyncActionNode):

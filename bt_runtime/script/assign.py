@@ -166,7 +166,7 @@ def make_assign(op: str, key: str, value_fn):
 
     if op in (":=", "="):
         def assign(bb: Blackboard, enums):
-            entry = bb._storage.get(key) or lookup(bb)  # a local entry without the call
+            entry = bb._resolved.get(key) or lookup(bb)  # a local entry without the call
             value = value_fn(bb, enums)  # after the entry exists: 'x := x' is 'not initialized'
             if value is EMPTY:
                 raise not_init("right", op)
@@ -188,7 +188,7 @@ def make_assign(op: str, key: str, value_fn):
     arith = {"+=": operator.add, "-=": operator.sub, "*=": operator.mul, "/=": ieee_div}[op]
 
     def update(bb: Blackboard, enums):
-        entry = bb._storage.get(key) or lookup(bb)  # a local entry without the call
+        entry = bb._resolved.get(key) or lookup(bb)  # a local entry without the call
         value = value_fn(bb, enums)
         if value is EMPTY:
             raise not_init("right", op)

@@ -15,10 +15,12 @@ from typing import Any
 
 from ..errors import BTRuntimeError
 from ..ports import EMPTY
+from ..status import FAILURE, SUCCESS
 from .assign import make_assign, make_bad_assign
 from .errors import CastError, ScriptError, ScriptRuntimeError
 from .operators import binary, compare, ieee_div, unary
 from .parser import Assign, Binary, Compare, Literal, Name, Node, ParseError, Ternary, Unary, parse
+from .shortcuts import shortcut_assign
 from .values import FLT_EPSILON, MAX_EXACT, cast_double, normalize, to_bool
 
 Fn = Any  # Callable[[Blackboard, dict[str, int] | None], Any]
@@ -47,7 +49,7 @@ def _name(key: str) -> Fn:
         if enums and key in enums:  # a scripting enum shadows a blackboard entry
             return float(enums[key])
         # bb.get_entry(key), whose first step (a local entry) is inlined: one call less per read
-        entry = bb._storage.get(key) or bb.get_entry(key)
+        entry = bb._resolved.get(key) or bb.get_entry(key)
         if entry is None:
             raise BTRuntimeError(f"Variable not found: {key}")
         value = entry.value
@@ -93,7 +95,7 @@ def _binary(op: str, lf: Fn, rf: Fn, right: Node, left: Node | None = None) -> F
                 def name_arith_const(bb, enums):
                     # lf(bb, enums) inlined for a number in a local entry (the usual 'x + 1');
                     # anything else (an enum, a remapped key, another type) takes lf itself
-                    entry = None if enums and key in enums else bb._storage.get(key)
+                    entry = None if enums and key in enums else bb._resolved.get(key)
                     if entry is not None:
                         x = entry.value
                         t = type(x)
@@ -155,7 +157,7 @@ def _compare_one(op: str, lf: Fn, rf: Fn, right: Node, left: Node | None = None)
 
             def name_order_number(bb, enums):
                 # lf(bb, enums) inlined for a number in a local entry (the usual 'x > 0')
-                entry = None if enums and key in enums else bb._storage.get(key)
+                entry = None if enums and key in enums else bb._resolved.get(key)
                 if entry is not None:
                     x = entry.value
                     t = type(x)
@@ -316,7 +318,9 @@ def _emit(node: Node, names: dict[str, str]) -> Fn:
         return _ternary(_emit(node.cond, names), _emit(node.then, names), _emit(node.other, names))
     if isinstance(node, Assign):
         if isinstance(node.target, Name):
-            return make_assign(node.op, names.get(node.target.name, node.target.name), _emit(node.value, names))
+            key = names.get(node.target.name, node.target.name)
+            general = make_assign(node.op, key, _emit(node.value, names))
+            return shortcut_assign(node.op, key, node.value, names, general) or general
         return make_bad_assign(node.op)
     raise TypeError(f"unknown AST node {node!r}")
 
@@ -370,11 +374,55 @@ def _parse_via_template(text: str) -> tuple[list[Node], dict[str, str]] | None:
 class Script:
     """A compiled script. ``run`` returns the last expression's value (int, float, str, EMPTY)."""
 
-    __slots__ = ("text", "_fn")
+    __slots__ = ("text", "_fn", "_action_tick", "_condition_tick")
 
     def __init__(self, text: str, fn: Fn):
         self.text = text
         self._fn = fn
+        self._action_tick = self._condition_tick = None
+
+    def action_tick(self) -> Any:
+        """``f(node) -> SUCCESS`` that runs the script on the node's blackboard, errors reported
+        as ``run`` reports them: the whole tick of a Script node in one call (shared by every
+        node with this text)."""
+        tick = self._action_tick
+        if tick is None:
+            fn, text = self._fn, self.text
+
+            def script_tick(node):
+                cfg = node.config
+                try:
+                    fn(cfg.blackboard, cfg.enums)
+                except CastError:
+                    raise
+                except BTRuntimeError as exc:
+                    raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
+                return SUCCESS
+
+            tick = self._action_tick = script_tick
+        return tick
+
+    def condition_tick(self) -> Any:
+        """``f(node) -> SUCCESS | FAILURE``: ``run_bool`` on the node's blackboard, the whole
+        tick of a ScriptCondition node in one call."""
+        tick = self._condition_tick
+        if tick is None:
+            fn, text = self._fn, self.text
+
+            def script_condition_tick(node):
+                cfg = node.config
+                try:
+                    value = fn(cfg.blackboard, cfg.enums)
+                except CastError:
+                    raise
+                except BTRuntimeError as exc:
+                    raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
+                if type(value) is float and value >= 0.0:
+                    return SUCCESS if value != 0.0 else FAILURE
+                return SUCCESS if to_bool(value) else FAILURE
+
+            tick = self._condition_tick = script_condition_tick
+        return tick
 
     def run(self, blackboard, enums: dict[str, int] | None = None) -> Any:
         try:

@@ -1,0 +1,171 @@
+"""One-frame closures for the statements trees use most: ``x := 1``, ``x := y``, ``x := y + 1``,
+``x += 1``. The general closure of an assignment is three calls deep (the assignment, its value,
+the variable it reads); these do the whole statement in one call when every entry involved
+already exists and holds a double (or, for a copy or a constant, the destination's own kind),
+and otherwise call the general closure, which holds the full rules. The fast path has no side
+effect before it decides, so the two can never disagree on what a statement does.
+"""
+
+from __future__ import annotations
+
+import operator
+from time import monotonic_ns as _monotonic_ns
+from typing import Any
+
+from .operators import ieee_div
+from .parser import Binary, Literal, Name, Node
+from .values import MAX_EXACT
+
+Fn = Any  # Callable[[Blackboard, dict[str, int] | None], Any]
+
+_ARITH = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": ieee_div}
+_UPDATE = {"+=": operator.add, "-=": operator.sub, "*=": operator.mul, "/=": ieee_div}
+
+
+def _number(node: Node) -> float | None:
+    """The value of a numeric literal that converts to double exactly, else None."""
+    if isinstance(node, Literal):
+        value = node.value
+        if type(value) is float or (type(value) is int and -MAX_EXACT <= value <= MAX_EXACT):
+            return float(value)
+    return None
+
+
+def shortcut_assign(op: str, key: str, value: Node, names: dict[str, str], general: Fn) -> Fn | None:
+    """A one-frame closure for ``key op value`` that falls back on ``general``, or None when
+    the statement has no shortcut. ``value`` is folded; ``names`` renames its variables."""
+    if op in ("+=", "-=", "*=", "/="):
+        number = _number(value)
+        if number is None or (op == "/=" and number == 0.0):
+            return None
+        return _update_by_constant(key, _UPDATE[op], number, op == "+=", general)
+    if op not in (":=", "="):
+        return None
+    if isinstance(value, Literal):
+        constant = value.value
+        if type(constant) is float or type(constant) is str:
+            return _assign_same_kind(key, constant, general)
+        if type(constant) is int and -MAX_EXACT <= constant <= MAX_EXACT:
+            return _assign_int_to_double(key, constant, general)
+        return None
+    if isinstance(value, Name):
+        return _copy(key, names.get(value.name, value.name), general)
+    if isinstance(value, Binary) and isinstance(value.left, Name) and value.op in _ARITH:
+        number = _number(value.right)
+        if number is None or (value.op == "/" and number == 0.0):
+            return None
+        source = names.get(value.left.name, value.left.name)
+        if value.op == "+":
+            return _assign_name_plus(key, source, number, general)
+        return _assign_name_arith(key, source, _ARITH[value.op], number, general)
+    return None
+
+
+def _update_by_constant(key: str, arith, number: float, plus: bool, general: Fn) -> Fn:
+    if plus:
+        def add_constant(bb, enums):
+            entry = bb._resolved.get(key)
+            if entry is not None:
+                old = entry.value
+                if type(old) is float:
+                    new = old + number
+                    entry.value = new  # entry.write(new), inlined
+                    entry.sequence_id += 1
+                    entry.stamp = _monotonic_ns()
+                    return new
+            return general(bb, enums)
+        return add_constant
+
+    def update_by_constant(bb, enums):
+        entry = bb._resolved.get(key)
+        if entry is not None:
+            old = entry.value
+            if type(old) is float:
+                new = arith(old, number)
+                entry.value = new
+                entry.sequence_id += 1
+                entry.stamp = _monotonic_ns()
+                return new
+        return general(bb, enums)
+    return update_by_constant
+
+
+def _assign_same_kind(key: str, constant: float | str, general: Fn) -> Fn:
+    kind = type(constant)
+
+    def assign_constant(bb, enums):
+        entry = bb._resolved.get(key)
+        if entry is not None and type(entry.value) is kind:
+            entry.value = constant
+            entry.sequence_id += 1
+            entry.stamp = _monotonic_ns()
+            return constant
+        return general(bb, enums)
+    return assign_constant
+
+
+def _assign_int_to_double(key: str, constant: int, general: Fn) -> Fn:
+    """``x := 1`` into a double entry stores 1.0 (BT.CPP converts into the stored kind)."""
+    number = float(constant)
+
+    def assign_int_constant(bb, enums):
+        entry = bb._resolved.get(key)
+        if entry is not None and type(entry.value) is float:
+            entry.value = number
+            entry.sequence_id += 1
+            entry.stamp = _monotonic_ns()
+            return number
+        return general(bb, enums)
+    return assign_int_constant
+
+
+def _copy(key: str, source: str, general: Fn) -> Fn:
+    def copy(bb, enums):
+        resolved = bb._resolved
+        entry = resolved.get(key)
+        src = resolved.get(source)
+        if entry is not None and src is not None and not (enums and source in enums):
+            value = src.value
+            kind = type(value)
+            if (kind is float or kind is str) and type(entry.value) is kind:
+                entry.value = value
+                entry.sequence_id += 1
+                entry.stamp = _monotonic_ns()
+                return value
+        return general(bb, enums)
+    return copy
+
+
+def _assign_name_plus(key: str, source: str, number: float, general: Fn) -> Fn:
+    def assign_plus(bb, enums):
+        resolved = bb._resolved
+        entry = resolved.get(key)
+        src = resolved.get(source)
+        if entry is not None and src is not None and not (enums and source in enums):
+            x = src.value
+            if type(x) is float and type(entry.value) is float:
+                new = x + number
+                entry.value = new
+                entry.sequence_id += 1
+                entry.stamp = _monotonic_ns()
+                return new
+        return general(bb, enums)
+    return assign_plus
+
+
+def _assign_name_arith(key: str, source: str, arith, number: float, general: Fn) -> Fn:
+    def assign_arith(bb, enums):
+        resolved = bb._resolved
+        entry = resolved.get(key)
+        src = resolved.get(source)
+        if entry is not None and src is not None and not (enums and source in enums):
+            x = src.value
+            if type(x) is float and type(entry.value) is float:
+                new = arith(x, number)
+                entry.value = new
+                entry.sequence_id += 1
+                entry.stamp = _monotonic_ns()
+                return new
+        return general(bb, enums)
+    return assign_arith
+

@@ -1,0 +1,148 @@
+"""The one-frame statement shortcuts (script/shortcuts.py) do exactly what the general closures
+do: same result, same stored value and kind, same error, for every kind of entry they may meet,
+and they never act on a remembered entry that a later change of structure replaced."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+
+import pytest
+
+from bt_runtime.blackboard import Blackboard
+from bt_runtime.ports import DOUBLE, INT, STRING, UINT64
+from bt_runtime.script import compiler
+from bt_runtime.script.compiler import compile_script, forget_compiled
+from bt_runtime.status import NodeStatus
+
+STATEMENTS = ["x := 1", "x := 2.5", "x := 'text'", "x = 1", "x := y", "x = y", "x := y + 1",
+              "x := y - 0.5", "x := y * 2", "x := y / 4", "x := x + 1", "x += 1", "x -= 2",
+              "x *= 3", "x /= 2", "x += 0.25", "@x := 1", "@x += 1", "x := @y + 1", "x := y; x += 1"]
+
+# (name, how the entry is prepared on a fresh blackboard): the kinds a shortcut must either
+# handle exactly or hand over.
+STATES: dict[str, Callable[[Blackboard, str], None]] = {
+    "missing": lambda bb, key: None,
+    "double": lambda bb, key: bb.set(key, 3.0),
+    "negative double": lambda bb, key: bb.set(key, -7.5),
+    "int": lambda bb, key: bb.set(key, 4),
+    "huge int": lambda bb, key: bb.set(key, 2**60 + 1),
+    "uint64": lambda bb, key: bb.create_entry(key, UINT64).write(5),
+    "typed empty double": lambda bb, key: bb.create_entry(key, DOUBLE),
+    "typed empty int": lambda bb, key: bb.create_entry(key, INT),
+    "untyped empty": lambda bb, key: bb.create_entry(key),
+    "string": lambda bb, key: bb.set(key, "abc"),
+    "numeric string": lambda bb, key: bb.create_entry(key, STRING).write("12"),
+    "bool": lambda bb, key: bb.set(key, True),
+}
+
+
+@pytest.fixture
+def general_only(monkeypatch: pytest.MonkeyPatch):
+    """Compile without the shortcuts (the reference), then restore the normal compiler."""
+
+    def compile_general(text: str):
+        forget_compiled()
+        with monkeypatch.context() as patch:
+            patch.setattr(compiler, "shortcut_assign", lambda *args: None)
+            return compile_script(text)
+
+    yield compile_general
+    forget_compiled()
+
+
+@pytest.mark.parametrize("text", STATEMENTS)
+def test_a_shortcut_does_what_the_general_closure_does(text: str, general_only) -> None:
+    general = general_only(text)
+    forget_compiled()
+    fast = compile_script(text)
+    assert fast._fn is not general._fn
+    for (x_name, prep_x), (y_name, prep_y), enums in itertools.product(
+            STATES.items(), STATES.items(), ({}, {"y": 9, "Z": 1})):
+        expected = _outcome_with(general, prep_x, prep_y, enums)
+        assert _outcome_with(fast, prep_x, prep_y, enums) == expected, (text, x_name, y_name, enums)
+
+
+def _outcome_with(script, prepare_x: Callable, prepare_y: Callable, enums: dict) -> list:
+    bb = Blackboard()
+    prepare_x(bb, "x")
+    prepare_y(bb, "y")
+    seen = []
+    for _ in range(2):
+        try:
+            result = script.run(bb, enums)
+            seen.append(("ok", type(result), repr(result)))
+        except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
+            seen.append(("error", type(exc), str(exc)))
+        for key in ("x", "y"):
+            entry = bb.get_entry(key)
+            seen.append(None if entry is None else (key, type(entry.value), repr(entry.value), entry.type.name,
+                                                    entry.sequence_id))
+    return seen
+
+
+def test_the_shortcuts_are_what_runs() -> None:
+    """The forms above compile to a shortcut (else the comparison would prove nothing)."""
+    forget_compiled()
+    assert compile_script("x := y + 1")._fn.__name__ == "assign_plus"
+    assert compile_script("x += 1")._fn.__name__ == "add_constant"
+    assert compile_script("x := 1")._fn.__name__ == "assign_int_constant"
+    assert compile_script("x := y")._fn.__name__ == "copy"
+
+
+def test_a_shortcut_through_a_remapped_subtree_follows_a_recreated_entry() -> None:
+    root = Blackboard.create()
+    mid = Blackboard.create(root)
+    mid.add_subtree_remapping("b", "a")
+    leaf = Blackboard.create(mid)
+    leaf.add_subtree_remapping("c", "b")
+    root.set("a", 1.0)
+    bump = compile_script("c += 1")
+    assert bump.run(leaf) == 2.0
+    old = root.get_entry("a")
+    root.unset("a")
+    root.set("a", 10.0)
+    assert bump.run(leaf) == 11.0  # the new entry, not the remembered old one
+    assert old.value == 2.0 and root.get("a") == 11.0
+
+
+def test_a_local_entry_read_before_it_was_removed_is_not_written_again() -> None:
+    bb = Blackboard.create()
+    bb.set("x", 1.0)
+    bump = compile_script("x := x + 1")
+    bump.run(bb)
+    old = bb.get_entry("x")
+    bb.unset("x")
+    with pytest.raises(Exception, match=r"left operand of the operator \[\+\] is not initialized"):
+        bump.run(bb)  # ':=' made 'x' anew (empty), then reading it fails as BT.CPP does
+    assert old.value == 2.0 and bb.get_entry("x") is not old
+
+
+def test_an_autoremapped_key_after_cloning_resolves_to_the_clone() -> None:
+    root = Blackboard.create()
+    child = Blackboard.create(root)
+    child.enable_auto_remapping()
+    root.set("k", 1.0)
+    bump = compile_script("k += 1")
+    assert bump.run(child) == 2.0
+    source = Blackboard.create()
+    source.set("k", 100.0)
+    source.clone_into(child)  # child now has its own 'k'
+    assert bump.run(child) == 101.0
+    assert root.get("k") == 2.0
+
+
+def test_script_nodes_tick_through_their_scripts_one_call_tick() -> None:
+    from bt_runtime import BehaviorTreeFactory
+
+    bb = Blackboard.create()
+    bb.set("n", 0.0)
+    tree = BehaviorTreeFactory().create_tree_from_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
+        '<Script code="n += 1"/><ScriptCondition code="n &gt; 1"/></Sequence></BehaviorTree></root>', bb)
+    script_node, condition_node = tree.root_node.children
+    assert script_node._cell.fast.__name__ == "script_tick"
+    assert condition_node._cell.fast.__name__ == "script_condition_tick"
+    assert tree.tick_exactly_once() is NodeStatus.FAILURE
+    assert tree.tick_exactly_once() is NodeStatus.SUCCESS
+    assert bb.get("n") == 2.0
