@@ -44,10 +44,26 @@ if TYPE_CHECKING:
 PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")
 POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
 _CONDITION_NAMES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
+_PRE_CONDITION_SET = frozenset(PRE_CONDITIONS)
+_CONDITION_ORDER = {name: i for i, name in enumerate(PRE_CONDITIONS + POST_CONDITIONS)}
 _node_config = NodeConfig._for_node
 _BAD_INSTANCE_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 _INT_RE = re.compile(r"-?[0-9]+")
 _DOUBLE_RE = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
+
+
+_port_name_verdicts: dict[str, bool] = {}
+
+
+def _allowed_port_name(name: str) -> bool:
+    """``is_allowed_port_name``, decided once per distinct attribute name (a tree repeats the
+    same few names on thousands of elements; the check walks every character)."""
+    verdict = _port_name_verdicts.get(name)
+    if verdict is None:
+        verdict = is_allowed_port_name(name)
+        if len(_port_name_verdicts) < 10_000:  # bounded: attribute names are few in practice
+            _port_name_verdicts[name] = verdict
+    return verdict
 
 
 def subtree_literal(text: str) -> Any:
@@ -71,6 +87,9 @@ class TreeBuilder:
         self.wake_up = WakeUpSignal()
         self.timers = TimerQueue()
         self.clock_holder: list = [time.monotonic]
+        # (port type, enums, text) literals already converted once in this build: the same
+        # literal on many nodes is checked once (the conversion is a pure function of these)
+        self._literals_ok: set[tuple[int, str]] = set()
 
     def build(self, tree_id: str, blackboard: Blackboard | None = None) -> Tree:
         """Build the tree ``tree_id``. The cyclic garbage collector is paused meanwhile: a build
@@ -125,16 +144,14 @@ class TreeBuilder:
                             elem: etree._Element) -> None:
         if _CONDITION_NAMES.isdisjoint(attrs):
             return
-        for names, target in ((PRE_CONDITIONS, cfg.pre_conditions), (POST_CONDITIONS, cfg.post_conditions)):
-            for attr in names:
-                code = attrs.get(attr)
-                if code is None:
-                    continue
-                try:
-                    target[attr] = compile_script(code)
-                except BehaviorTreeException as exc:  # BT.CPP: LogicError("Error in the script ...")
-                    raise XMLLogicError(f"{attr}: {exc}", file=doc.file, line=doc.line_of(elem),
-                                        element=elem.tag) from None
+        # in BT.CPP's order of each kind (a node has one or two of the eight, usually)
+        for attr in sorted(_CONDITION_NAMES.intersection(attrs), key=_CONDITION_ORDER.__getitem__):
+            try:
+                script = compile_script(attrs[attr])
+            except BehaviorTreeException as exc:  # BT.CPP: LogicError("Error in the script ...")
+                raise XMLLogicError(f"{attr}: {exc}", file=doc.file, line=doc.line_of(elem),
+                                    element=elem.tag) from None
+            (cfg.pre_conditions if attr in _PRE_CONDITION_SET else cfg.post_conditions)[attr] = script
 
     @staticmethod
     def _check_instance_name(name: str) -> str | None:
@@ -207,7 +224,7 @@ class TreeBuilder:
         for attr, value in attrs.items():
             if attr in ("ID", "name", "_autoremap") or attr in PRE_CONDITIONS or attr in POST_CONDITIONS:
                 continue
-            if not is_allowed_port_name(attr):
+            if not _allowed_port_name(attr):
                 cfg.other_attributes[attr] = value
                 continue
             port = manifest.ports.get(attr)
@@ -259,8 +276,12 @@ class TreeBuilder:
                     except BehaviorTreeException as exc:
                         raise self._err(doc, elem, str(exc)) from None
             elif ptype.strongly_typed and ptype.has_converter and port.direction is not PortDirection.OUTPUT:
+                checked = (id(ptype), raw)  # the manifests keep every port type alive
+                if checked in self._literals_ok:
+                    continue
                 try:
                     ptype.from_string(raw, cfg.enums)
+                    self._literals_ok.add(checked)
                 except Exception:  # BT.CPP catches any exception of the converter: LogicError
                     raise XMLLogicError(f'The port with name "{name}" and value "{raw}" can not be '
                                         f"converted to {ptype.name}", file=doc.file, line=doc.line_of(elem),
@@ -316,7 +337,7 @@ class TreeBuilder:
                 except BehaviorTreeException:
                     raise self._err(doc, elem, f"_autoremap must be true or false, got '{value}'") from None
                 continue
-            if not is_allowed_port_name(attr):
+            if not _allowed_port_name(attr):
                 continue
             remap[attr] = value
         child_bb.enable_auto_remapping(autoremap)
