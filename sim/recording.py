@@ -11,10 +11,11 @@ from bt_runtime.runtime.recording import MapSnapshot, RecordingHooks, StreamSpec
 from .driver import SimDriver
 
 GROUND_TRUTH, FAULTS, EVENTS = "/sim/ground_truth", "/sim/faults", "/sim/events"
+GROUND_TRUTH_POSE = GROUND_TRUTH + "/pose"  # the same pose as PoseStamped: what Foxglove's 3D panel draws
 
 
 def recording_hooks(driver: SimDriver, *, ground_truth: str = GROUND_TRUTH, faults: str = FAULTS,
-                    events: str = EVENTS) -> RecordingHooks:
+                    events: str = EVENTS, ground_truth_pose: str = GROUND_TRUTH_POSE) -> RecordingHooks:
     costmap = driver.navigation.global_costmap
     grid = driver.map
 
@@ -31,7 +32,7 @@ def recording_hooks(driver: SimDriver, *, ground_truth: str = GROUND_TRUTH, faul
     truth = driver.sim.subscribe
     return RecordingHooks(
         # the simulator's own topics: not on the driver interface (the robot never gets the truth)
-        streams=[StreamSpec("ground_truth", ground_truth, "odometry", source=truth),
+        streams=[StreamSpec("ground_truth", ground_truth, "odometry", source=truth, pose_topic=ground_truth_pose),
                  StreamSpec("sim_event", faults, "event", select=lambda e: e.kind == "fault", source=truth),
                  StreamSpec("sim_event", events, "event", select=lambda e: e.kind != "fault", source=truth)],
         map_source=map_source,

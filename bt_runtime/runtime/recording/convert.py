@@ -96,6 +96,9 @@ class ConvertState:
     # loop-clock seconds -> robot time (the driver's ``robot_time``: ROS time under --driver ros2);
     # None: the loop clock is the robot's clock (the simulator)
     robot_time: Callable[[float], float | None] | None = None
+    # odometry-like topic -> a geometry_msgs/msg/PoseStamped topic of the same pose (Foxglove's 3D
+    # panel draws poses, not nav_msgs/msg/Odometry)
+    pose_topics: dict[str, str] = field(default_factory=dict)
 
     def robot(self, t: float) -> float:
         """A loop-clock time as robot time, the time of every stamp and log time in a recording."""
@@ -135,6 +138,12 @@ def odometry_layout(frame: str, child: str) -> Layout:
                    pose=PoseWithCovariance(pose=pose(0.0, 0.0, 0.0), covariance=COV36.copy()),
                    twist=TwistWithCovariance(twist=twist(0.0, 0.0), covariance=COV36.copy()))
     return Layout("nav_msgs/msg/Odometry", msg, STAMP + POSE + [(("twist", "twist", *p), c) for p, c in TWIST])
+
+
+def pose_stamped_layout(frame: str) -> Layout:
+    msg = PoseStamped(header=Header(stamp=Time(0, 0), frame_id=frame), pose=pose(0.0, 0.0, 0.0))
+    return Layout("geometry_msgs/msg/PoseStamped", msg, STAMP + _fields(("pose", "position"), "xyz")
+                  + _fields(("pose", "orientation"), "xyzw"))
 
 
 def tf_layout(parent: str, child: str) -> Layout:
@@ -343,7 +352,16 @@ def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
 def odometry_like(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     f = s.frames
     msg = _odometry_bytes(s, s.layout(("odometry", topic), odometry_layout, f.map, f.base), m)
-    return [(topic, "nav_msgs/msg/Odometry", msg)]
+    out = [(topic, "nav_msgs/msg/Odometry", msg)]
+    pose_topic = s.pose_topics.get(topic)
+    if pose_topic:
+        p = m.pose
+        sec, ns = s.sec_ns(m.stamp)
+        half = p.yaw / 2.0
+        data = s.layout(("pose", pose_topic), pose_stamped_layout, f.map).encode(
+            sec, ns, float(p.x), float(p.y), 0.0, 0.0, 0.0, math.sin(half), math.cos(half))
+        out.append((pose_topic, "geometry_msgs/msg/PoseStamped", data))
+    return out
 
 
 def event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
@@ -357,6 +375,8 @@ CONVERTERS: dict[str, Callable[[ConvertState, str, float, Any], Output]] = {
     "diagnostics": diagnostics, "supervisor_event": supervisor_event, "gate_event": gate_event,
     "odometry": odometry_like, "event": event,
 }
+
+POSE_TYPE = "geometry_msgs/msg/PoseStamped"  # an odometry-like stream's pose_topic (hooks.StreamSpec)
 
 # the type each kind is written as ("odom" also writes tf2_msgs/msg/TFMessage on the tf topic)
 KIND_TYPES: dict[str, str] = {

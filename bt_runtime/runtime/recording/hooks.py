@@ -27,7 +27,9 @@ class StreamSpec:
     nav_msgs/msg/Odometry in the map frame) or 'event' (anything with ``t``, ``kind``, ``data``;
     written as rcl_interfaces/msg/Log). ``select`` filters messages (None: all). ``source``
     subscribes to streams that are not the robot's (the simulator's ground truth and events,
-    which the driver interface does not carry); None: the driver.
+    which the driver interface does not carry); None: the driver. ``pose_topic`` (odometry
+    only): the same pose also as geometry_msgs/msg/PoseStamped there, which Foxglove's 3D panel
+    draws (it does not draw Odometry); empty: none.
     """
 
     stream: str
@@ -35,6 +37,7 @@ class StreamSpec:
     kind: str
     select: Callable[[Any], bool] | None = None
     source: Callable[[str, Callable[[Any], None]], Callable[[], None]] | None = None
+    pose_topic: str = ""
 
 
 @dataclass

@@ -33,7 +33,7 @@ log = structlog.get_logger("bt_runtime.recording")
 LATCHED_TYPES = {"nav_msgs/msg/OccupancyGrid"}
 # kinds whose conversion has one output (on the item's topic) and keeps no state
 SKIPPABLE = {"scan", "imu", "battery", "plan", "command", "tree_log", "diagnostics", "supervisor_event",
-             "gate_event", "odometry", "event"}
+             "gate_event", "event"}
 
 
 class RecordPipeline:

@@ -20,7 +20,7 @@ import structlog
 
 from ..twist_mux import INPUT_STREAM
 from .config import RecordingOptions
-from .convert import KIND_TYPES
+from .convert import KIND_TYPES, POSE_TYPE
 from .hooks import RecordingHooks
 from .pipeline import RecordPipeline
 from .tree_log import tree_log
@@ -73,6 +73,8 @@ class Recorder:
             if topic:
                 self._subscribe(INPUT_STREAM + name, "command", topic)
         for spec in self.hooks.streams:
+            if spec.pose_topic:
+                self.pipeline.state.pose_topics[spec.topic] = spec.pose_topic
             self._subscribe(spec.stream, spec.kind, spec.topic, spec.select, spec.source)
         gate = rt.gate
         self._previous_on_output = gate.on_output
@@ -106,6 +108,7 @@ class Recorder:
         if self.hooks.map_source is not None:
             found[t.map] = KIND_TYPES["map"]
         found.update({spec.topic: KIND_TYPES[spec.kind] for spec in self.hooks.streams})
+        found.update({spec.pose_topic: POSE_TYPE for spec in self.hooks.streams if spec.pose_topic})
         found.pop("", None)  # topics configured off
         return found
 

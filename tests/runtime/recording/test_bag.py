@@ -27,6 +27,7 @@ EXPECTED_TYPES = {
     "/cmd_vel/navigation": "geometry_msgs/msg/Twist", "/battery_state": "sensor_msgs/msg/BatteryState",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray", "/behavior_tree_log": "nav2_msgs/msg/BehaviorTreeLog",
     "/supervisor/events": "rcl_interfaces/msg/Log", "/sim/ground_truth": "nav_msgs/msg/Odometry",
+    "/sim/ground_truth/pose": "geometry_msgs/msg/PoseStamped",
 }
 
 

@@ -90,6 +90,13 @@ def test_localized_pose_and_ground_truth_are_rosbags_bytes(frames):
         assert tf == _reference_tf(frames.map, frames.odom, loc.stamp, x, y, yaw)
         (_, _, truth), = C.odometry_like(state, "/sim/ground_truth", 0.0, m)
         assert truth == _reference_odometry(frames.map, frames.base, m)
+        state.pose_topics["/sim/ground_truth"] = "/sim/ground_truth/pose"
+        (_, _, truth), (topic, typename, pose) = C.odometry_like(state, "/sim/ground_truth", 0.0, m)
+        reference = C.PoseStamped(header=C.Header(stamp=_time(m.stamp), frame_id=frames.map),
+                                  pose=C.pose(m.pose.x, m.pose.y, m.pose.yaw))
+        assert (topic, typename) == ("/sim/ground_truth/pose", "geometry_msgs/msg/PoseStamped")
+        assert pose == serialize(reference, typename)
+        del state.pose_topics["/sim/ground_truth"]
 
 
 @pytest.mark.parametrize("frames", FRAMES)
