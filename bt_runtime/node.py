@@ -25,9 +25,9 @@ from types import MappingProxyType, MethodType
 from typing import Any, ClassVar
 
 from .blackboard import Blackboard
+from .condition_tick import conditions_tick as _conditions_tick
 from .errors import BehaviorTreeException, BTRuntimeError, LogicError, NodeExecutionError
 from .ports import EMPTY, PortInfo, blackboard_key, ports_dict
-from .script import CastError, ScriptRuntimeError, to_bool
 from .status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus, NodeType
 from .timers import TimerQueue, WakeUpSignal
 
@@ -1101,67 +1101,3 @@ def _after_full_tick(cls: type) -> Callable[[TreeNode, NodeStatus], None] | None
     if full is DecoratorNode._execute_tick_full:
         return _after_decorator_tick
     return False
-
-
-def _conditions_tick(tick: Callable[[TreeNode], NodeStatus], cfg: NodeConfig,
-                     after: Callable[[TreeNode, NodeStatus], None] | None) -> Callable[[TreeNode], NodeStatus]:
-    """``_execute_tick_full`` for a node with pre/post-conditions and no hooks, specialised to
-    the scripts it has: no dictionary look-ups and no absent scripts on the tick path. ``after``
-    is the library subclass's own step (SyncActionNode's RUNNING check, DecoratorNode's child
-    reset).
-
-    The scripts are taken from the config now; code that changes a node's conditions later
-    calls ``refresh_conditions()``, as it must for the fast paths too."""
-    pre = cfg._pre or {}
-    post = cfg._post or {}
-    # (the script's closure, its Script for errors, the result, negate): Script.run_bool inlined
-    idle_checks = tuple((script._fn, script, result, negate) for key, result, negate in (
-        ("_failureIf", FAILURE, False), ("_successIf", SUCCESS, False), ("_skipIf", SKIPPED, False),
-        ("_while", SKIPPED, True)) if (script := pre.get(key)) is not None)
-    running_while = pre["_while"].run_bool if "_while" in pre else None
-    on_success = tuple(s.run for k in ("_onSuccess", "_post") if (s := post.get(k)) is not None)
-    on_failure = tuple(s.run for k in ("_onFailure", "_post") if (s := post.get(k)) is not None)
-
-    def execute(node: TreeNode) -> NodeStatus:
-        bb = cfg.blackboard
-        enums = cfg.enums
-        cell = node._cell
-        current = cell.status
-        status = None
-        if current is IDLE:
-            for fn, script, result, negate in idle_checks:
-                try:
-                    value = fn(bb, enums)
-                except CastError:
-                    raise
-                except BTRuntimeError as exc:  # as Script.run_bool reports it
-                    raise ScriptRuntimeError(f"Error in script [{script.text}]\n{exc}") from exc
-                if (value != 0.0 if type(value) is float and value >= 0.0 else to_bool(value)) is not negate:
-                    status = result
-                    break
-        elif current is RUNNING and running_while is not None and not running_while(bb, enums):
-            node.halt_node()
-            return SKIPPED
-        if status is None:
-            try:
-                status = tick(node)
-            except NodeExecutionError:
-                raise
-            except Exception as exc:
-                raise NodeExecutionError(cfg.path, cfg.registration_id, exc) from exc
-        if status is SUCCESS:
-            for run in on_success:
-                run(bb, enums)
-        elif status is FAILURE:
-            for run in on_failure:
-                run(bb, enums)
-        if status is not SKIPPED:
-            if status is IDLE:
-                node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
-            cell.status = status
-        if after is not None:
-            after(node, status)
-        return status
-
-    execute.wraps_tick_errors = True  # type: ignore[attr-defined]  # see _is_execute_tick
-    return execute

@@ -62,7 +62,22 @@ def _name(key: str) -> Fn:
 
 # --- operators ------------------------------------------------------------------------------
 
-def _unary(op: str, f: Fn) -> Fn:
+def _unary(op: str, f: Fn, operand: Node | None = None) -> Fn:
+    if op == "!" and isinstance(operand, Name):
+        key = operand.name
+
+        def not_name(bb, enums):
+            # f(bb, enums) inlined for a double in an entry already found (the usual '!flag')
+            entry = None if enums and key in enums else bb._resolved.get(key)
+            if entry is not None:
+                v = entry.value
+                if type(v) is float:
+                    return 0.0 if v else 1.0
+            v = f(bb, enums)
+            if type(v) is float:
+                return 0.0 if v else 1.0
+            return unary("!", v)
+        return not_name
     if op == "-":
         def negate(bb, enums):
             v = f(bb, enums)
@@ -300,7 +315,10 @@ def _emit(node: Node, names: dict[str, str]) -> Fn:
     if isinstance(node, Name):
         return _name(names.get(node.name, node.name))
     if isinstance(node, Unary):
-        return _unary(node.op, _emit(node.operand, names))
+        operand = node.operand
+        if isinstance(operand, Name):
+            operand = Name(names.get(operand.name, operand.name))
+        return _unary(node.op, _emit(node.operand, names), operand)
     if isinstance(node, Binary):
         left = node.left
         if isinstance(left, Name):

@@ -7,6 +7,7 @@ import pytest
 
 from bt_runtime import BehaviorTreeFactory, NodeStatus, SyncActionNode
 from bt_runtime.errors import BehaviorTreeException
+from bt_runtime.node import ActionNodeBase
 
 
 class Stuck(SyncActionNode):
@@ -35,3 +36,56 @@ def test_a_failing_pre_condition_script_is_reported_with_its_text(hooked: bool) 
         next(n for n in tree.nodes() if n.name == "a").set_pre_tick_function(lambda node: None)
     with pytest.raises(BehaviorTreeException, match=r"Error in script \[missing > 1\]\nVariable not found: missing"):
         tree.tick_exactly_once()
+
+
+class FromBlackboard(ActionNodeBase):
+    """Returns the status named by the blackboard entry 'ret' (RUNNING included)."""
+
+    def tick(self) -> NodeStatus:
+        return NodeStatus[self.config.blackboard.get("ret")]
+
+
+CONDITION_SETS = [
+    '_skipIf="skip"', '_successIf="ok"', '_failureIf="bad"', '_while="go"',
+    '_skipIf="skip" _onSuccess="s += 1" _onFailure="f += 1"', '_while="go" _onHalted="h += 1" _post="p += 1"',
+    '_failureIf="bad" _post="p += 1"', '_post="p += 1"', '_onSuccess="s += 1"',
+    '_skipIf="skip" _successIf="ok" _failureIf="bad" _while="go"',  # several checks: the general closure
+    '_successIf="ok" _onSuccess="s += 1" _post="p := p + 2" _onFailure="f += 1"',
+]
+
+
+@pytest.mark.parametrize("attrs", CONDITION_SETS)
+def test_specialised_condition_ticks_match_the_full_path(attrs: str) -> None:
+    """Over a seeded run of changing blackboards, a node with conditions ticks exactly as the
+    full path does (taken when a hook is set), RUNNING and halts included."""
+    import random
+
+    from bt_runtime.condition_tick import conditions_tick
+
+    def run(hooked: bool) -> list:
+        f = BehaviorTreeFactory()
+        f.register_node_type(FromBlackboard)
+        tree = f.create_tree_from_text(
+            '<root BTCPP_format="4"><BehaviorTree ID="M"><ReactiveSequence>'
+            f'<ScriptCondition code="live"/><FromBlackboard name="n" {attrs}/>'
+            '</ReactiveSequence></BehaviorTree></root>')
+        node = next(n for n in tree.nodes() if n.name == "n")
+        if hooked:
+            node.set_pre_tick_function(lambda n: None)
+        else:
+            assert node._cell.fast.__module__ == conditions_tick.__module__
+        bb = tree.root_blackboard
+        for key in ("s", "f", "p", "h"):
+            bb.set(key, 0.0)
+        rng = random.Random(1414)
+        seen = []
+        for _ in range(300):
+            for key in ("skip", "ok", "bad", "live"):
+                bb.set(key, float(rng.random() < (0.8 if key == "live" else 0.25)))
+            bb.set("go", float(rng.random() < 0.8))
+            bb.set("ret", rng.choice(["SUCCESS", "FAILURE", "RUNNING", "RUNNING"]))
+            seen.append((tree.tick_exactly_once().name, node.status.name,
+                         *(bb.get(k) for k in ("s", "f", "p", "h"))))
+        return seen
+
+    assert run(hooked=False) == run(hooked=True)

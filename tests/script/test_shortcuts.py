@@ -17,7 +17,8 @@ from bt_runtime.status import NodeStatus
 
 STATEMENTS = ["x := 1", "x := 2.5", "x := 'text'", "x = 1", "x := y", "x = y", "x := y + 1",
               "x := y - 0.5", "x := y * 2", "x := y / 4", "x := x + 1", "x += 1", "x -= 2",
-              "x *= 3", "x /= 2", "x += 0.25", "@x := 1", "@x += 1", "x := @y + 1", "x := y; x += 1"]
+              "x *= 3", "x /= 2", "x += 0.25", "@x := 1", "@x += 1", "x := @y + 1", "x := y; x += 1",
+              "!y", "x := !y", "!@y"]
 
 # (name, how the entry is prepared on a fresh blackboard): the kinds a shortcut must either
 # handle exactly or hand over.
@@ -45,6 +46,8 @@ def general_only(monkeypatch: pytest.MonkeyPatch):
         forget_compiled()
         with monkeypatch.context() as patch:
             patch.setattr(compiler, "shortcut_assign", lambda *args: None)
+            unary = compiler._unary
+            patch.setattr(compiler, "_unary", lambda op, f, operand=None: unary(op, f))
             return compile_script(text)
 
     yield compile_general
@@ -88,6 +91,7 @@ def test_the_shortcuts_are_what_runs() -> None:
     assert compile_script("x += 1")._fn.__name__ == "add_constant"
     assert compile_script("x := 1")._fn.__name__ == "assign_int_constant"
     assert compile_script("x := y")._fn.__name__ == "copy"
+    assert compile_script("!y")._fn.__name__ == "not_name"
 
 
 def test_a_shortcut_through_a_remapped_subtree_follows_a_recreated_entry() -> None:
