@@ -46,6 +46,7 @@ from .faults import FaultInjector
 from .geometry import RayCaster, wrap_angle
 from .localization import LocalizationDriver
 from .physics import DiffDriveBase, PhysicsWorld
+from .raster_cache import world_raster
 from .robot import RobotProfile, load_profile
 from .sensors import (
     BatteryDriver,
@@ -55,7 +56,7 @@ from .sensors import (
     LidarDriver,
     OdomDriver,
 )
-from .world import World, lidar_geometry, load_world, rasterize_obstacles
+from .world import World, lidar_geometry, load_world
 
 log = structlog.get_logger("sim")
 
@@ -515,6 +516,8 @@ class Simulator:
 
     def rasterize(self, resolution: float = 0.05, *, layer: str = "lidar", dynamic: bool = False,
                   inflate: float = 0.0, padding: float = 0.0):
-        """Occupancy raster of the world (static only by default, like a pre-built SLAM map)."""
-        return rasterize_obstacles(self.obstacles(dynamic=dynamic), self.world.bounds, resolution,
-                                   layer=layer, inflate=inflate, padding=padding)
+        """Occupancy raster of the world (static only by default, like a pre-built SLAM map). The
+        world's own shapes come from a per-process cache (sim/raster_cache.py)."""
+        extra = list(self.dynamic_obstacles.values()) if dynamic else []
+        return world_raster(self.world.obstacles, extra, self.world.bounds, resolution,
+                            layer=layer, inflate=inflate, padding=padding)

@@ -63,6 +63,33 @@ class PlanResult:
         return self.error_code is NavErrorCode.NONE
 
 
+_GRAPHS: OrderedDict[tuple[int, int], csr_matrix] = OrderedDict()  # (Hp, Wp) -> a template graph
+
+
+def _grid_graph(hp: int, wp: int, offs) -> csr_matrix:
+    """The fixed CSR structure of the padded 8-connected grid (border rows point to themselves).
+    Its index arrays depend only on the grid's size: built once per process per size (~10 ms
+    of every run's setup) and shared, read-only; each planner gets its own matrix over them
+    (searches replace its ``data``, never the indices)."""
+    key = (hp, wp)
+    tpl = _GRAPHS.get(key)
+    if tpl is None:
+        n = hp * wp
+        p = np.arange(n, dtype=np.int64)
+        cols = np.empty((n, 8), np.int32)
+        for k, (off, _L) in enumerate(offs):
+            q = p + off
+            cols[:, k] = np.where((q >= 0) & (q < n), q, p)
+        tpl = csr_matrix((np.ones(n * 8), cols.ravel(), np.arange(0, n * 8 + 1, 8, dtype=np.int64)),
+                         shape=(n, n))
+        for arr in (tpl.data, tpl.indices, tpl.indptr):
+            arr.setflags(write=False)
+        _GRAPHS[key] = tpl
+        if len(_GRAPHS) > 8:
+            _GRAPHS.popitem(last=False)
+    return csr_matrix((tpl.data, tpl.indices, tpl.indptr), shape=tpl.shape, copy=False)
+
+
 class GridPlanner:
     def __init__(self, costmap: GlobalCostmap, params: PlannerParams | None = None):
         self.costmap = costmap
@@ -73,15 +100,7 @@ class GridPlanner:
         self.Np = self.Hp * self.Wp
         wp = self.Wp
         self._offs = tuple((dr * wp + dc, SQRT2 if dr and dc else 1.0) for dr, dc in _OFFSETS)
-        # fixed CSR structure of the padded 8-connected grid (border rows point to themselves)
-        p = np.arange(self.Np, dtype=np.int64)
-        cols = np.empty((self.Np, 8), np.int32)
-        for k, (off, _L) in enumerate(self._offs):
-            q = p + off
-            cols[:, k] = np.where((q >= 0) & (q < self.Np), q, p)
-        self._graph = csr_matrix((np.ones(self.Np * 8), cols.ravel(),
-                                  np.arange(0, self.Np * 8 + 1, 8, dtype=np.int64)),
-                                 shape=(self.Np, self.Np))
+        self._graph = _grid_graph(self.Hp, self.Wp, self._offs)
         self._edge_len = np.array([L for _, L in self._offs])
         self._heuristics: OrderedDict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = OrderedDict()
         self._master_cache: tuple[int, bool, np.ndarray] | None = None
