@@ -517,6 +517,11 @@ class TreeNode:
         """Read an input port (spec 7.3): literal converted to the port type, or a blackboard
         value (strings converted to typed ports). Raises BTRuntimeError unless ``default`` is
         given, which is then returned on failure."""
+        cache = self._input_cache  # a literal already converted: no call (the usual case)
+        if cache is not None:
+            value = cache.get(name, _MISSING)
+            if value is not _MISSING:
+                return value
         try:
             return self._read_input(name)
         except BehaviorTreeException:

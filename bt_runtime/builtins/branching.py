@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 
 from ..errors import BehaviorTreeException, LogicError
-from ..node import ControlNode, NodeConfig
+from ..node import ControlNode, NodeConfig, tick_cell
 from ..ports import input_port, parse_float
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
@@ -29,13 +29,13 @@ class IfThenElseNode(ControlNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        children = self.children
-        n = len(children)
+        cells = self._cells  # the children's cells: tick_cell(cell) is child.execute_tick()
+        n = len(cells)
         if n != 2 and n != 3:
             raise LogicError("IfThenElseNode must have either 2 or 3 children")
-        self.set_status(RUNNING)
+        self._cell.status = RUNNING  # set_status(RUNNING)
         if self._child_idx == 0:
-            cond = children[0].execute_tick()
+            cond = tick_cell(cells[0])
             if cond is RUNNING:
                 return RUNNING
             if cond is SUCCESS:
@@ -46,7 +46,7 @@ class IfThenElseNode(ControlNode):
                 else:
                     return FAILURE
         if self._child_idx > 0:
-            status = children[self._child_idx].execute_tick()
+            status = tick_cell(cells[self._child_idx])
             if status is RUNNING:
                 return RUNNING
             self.reset_children()
@@ -63,23 +63,23 @@ class WhileDoElseNode(ControlNode):
     """Reactive if/else: the condition is ticked every tick and switches branches."""
 
     def tick(self) -> NodeStatus:
-        children = self.children
-        n = len(children)
+        cells = self._cells  # the children's cells: tick_cell(cell) is child.execute_tick()
+        n = len(cells)
         if n != 2 and n != 3:
             raise LogicError("WhileDoElseNode must have either 2 or 3 children")
-        self.set_status(RUNNING)
-        cond = children[0].execute_tick()
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        cond = tick_cell(cells[0])
         if cond is RUNNING:
             return RUNNING
         status = IDLE
         if cond is SUCCESS:
             if n == 3:
                 self.halt_child(2)
-            status = children[1].execute_tick()
+            status = tick_cell(cells[1])
         elif cond is FAILURE:
             if n == 3:
                 self.halt_child(1)
-                status = children[2].execute_tick()
+                status = tick_cell(cells[2])
             else:
                 status = FAILURE
         if status is RUNNING:
@@ -137,8 +137,8 @@ class SwitchNode(ControlNode):
 
     def tick(self) -> NodeStatus:
         k = self.num_cases
-        children = self.children
-        if len(children) != k + 1:
+        cells = self._cells
+        if len(cells) != k + 1:
             raise LogicError("Wrong number of children in SwitchNode; must be (num_cases + default)")
         match = k
         variable = self.get_input("variable", None)
@@ -151,7 +151,7 @@ class SwitchNode(ControlNode):
                     break
         if self._running_child != -1 and self._running_child != match:
             self.halt_child(self._running_child)
-        status = children[match].execute_tick()
+        status = tick_cell(cells[match])
         if status is SKIPPED:
             self._running_child = -1
             return SKIPPED

@@ -280,7 +280,24 @@ class SubTreeNode(DecoratorNode):
         cell = self._cell
         if cell.status is IDLE:
             cell.status = RUNNING  # set_status(RUNNING)
-        status = tick_cell(self._child_cell)
+        child = self._child_cell
+        # -- status = tick_cell(child), inlined: every level of a SubTree chain pays it ----------
+        fast = child.fast
+        try:
+            status = fast(child.node)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
+                raise
+            raise _wrap_error(child, exc) from exc
+        if status is not SKIPPED:
+            if status is IDLE:
+                child.node.set_status(status)  # raises
+            child.status = status
+        # -------------------------------------------------------------------------------------
         if status is SUCCESS or status is FAILURE:
-            self.reset_child()
+            if child.status is RUNNING:  # reset_child(), inlined
+                child.node.halt_node()
+            child.status = IDLE
         return status

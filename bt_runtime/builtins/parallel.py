@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..errors import BTRuntimeError, LogicError
-from ..node import ControlNode, NodeConfig
+from ..node import ControlNode, NodeConfig, tick_cell
 from ..ports import input_port
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
@@ -45,20 +45,20 @@ class ParallelNode(ControlNode):
             f_raw = int(self.get_input("failure_count"))
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [failure_count] in ParallelNode") from None
-        children = self.children
-        n = len(children)
+        cells = self._cells
+        n = len(cells)
         s_eff = _effective(s_raw, n)
         f_eff = _effective(f_raw, n)
         if n < s_eff:
             raise LogicError("Number of children is less than threshold. Can never succeed.")
         if n < f_eff:
             raise LogicError("Number of children is less than threshold. Can never fail.")
-        self.set_status(RUNNING)
+        self._cell.status = RUNNING  # set_status(RUNNING)
         skipped = 0
         completed = self._completed
-        for i, child in enumerate(children):
+        for i, child in enumerate(cells):
             if i not in completed:
-                status = child.execute_tick()
+                status = tick_cell(child)  # child.execute_tick()
                 if status is SKIPPED:
                     skipped += 1
                 elif status is SUCCESS:
@@ -105,18 +105,18 @@ class ParallelAllNode(ControlNode):
             max_failures = int(self.get_input("max_failures"))
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [max_failures] in ParallelNode") from None
-        children = self.children
-        n = len(children)
+        cells = self._cells
+        n = len(cells)
         threshold = _effective(max_failures, n)
         if n < threshold:
             raise LogicError("Number of children is less than threshold. Can never fail.")
-        self.set_status(RUNNING)
+        self._cell.status = RUNNING  # set_status(RUNNING)
         skipped = 0
         completed = self._completed
-        for i, child in enumerate(children):
+        for i, child in enumerate(cells):
             if i in completed:
                 continue
-            status = child.execute_tick()
+            status = tick_cell(child)  # child.execute_tick()
             if status is SUCCESS:
                 completed.add(i)
             elif status is FAILURE:
