@@ -90,6 +90,7 @@ class TreeBuilder:
         # (port type, enums, text) literals already converted once in this build: the same
         # literal on many nodes is checked once (the conversion is a pure function of these)
         self._literals_ok: set[tuple[int, str]] = set()
+        self._subtree_plans: dict[tuple[str, tuple], tuple] = {}  # see _subtree_plan
 
     def build(self, tree_id: str, blackboard: Blackboard | None = None) -> Tree:
         """Build the tree ``tree_id``. The cyclic garbage collector is paused meanwhile: a build
@@ -299,6 +300,52 @@ class TreeBuilder:
         record.nodes.append(node)
         return node
 
+    def _subtree_plan(self, sub_id: str, attrs: dict[str, str], doc: XMLDocument,
+                      elem: etree._Element) -> tuple:
+        """What a <SubTree> element's attributes mean, worked out once per distinct (ID,
+        attributes) in a build (a subtree used in many places is mostly used the same way):
+        (port remapping, _autoremap, blackboard remappings, literal entries, other attributes)."""
+        remap: dict[str, str] = {}
+        autoremap = False
+        for attr, value in attrs.items():
+            if value == "{=}":
+                value = "{" + attr + "}"
+            if attr == "_autoremap":
+                try:
+                    autoremap = parse_bool(value)
+                except BehaviorTreeException:
+                    raise self._err(doc, elem, f"_autoremap must be true or false, got '{value}'") from None
+                continue
+            if not _allowed_port_name(attr):
+                continue
+            remap[attr] = value
+        model = self.registry.subtree_models.get(sub_id)
+        if model and not autoremap:
+            for port_name, port in model.items():
+                if port_name in remap:
+                    continue
+                if not port.has_default:
+                    raise self._err(doc, elem, f"In the <TreeNodesModel> the <Subtree ID=\"{sub_id}\"> is "
+                                               f"defining a mandatory port called [{port_name}], but you are "
+                                               "not remapping it")
+                remap[port_name] = port.default_string()
+        remapped: list[tuple[str, str]] = []
+        literals: list[tuple[str, Any, Any]] = []
+        for internal, value in remap.items():
+            key = blackboard_key(value, internal) if is_strict_blackboard_pointer(value.strip(" ")) else None
+            if key is not None:
+                remapped.append((internal, key))
+            else:
+                literal = subtree_literal(value)
+                entry_type = (STRING if isinstance(literal, str) else
+                              DOUBLE if isinstance(literal, float) else
+                              INT if -(2**31) <= literal < 2**31 else INT64)
+                literals.append((internal, literal, entry_type))
+        other = {k: v for k, v in attrs.items() if k not in remap and k not in ("ID", "name")
+                 and k not in PRE_CONDITIONS and k not in POST_CONDITIONS}
+        other.setdefault("_autoremap", "true" if autoremap else "false")
+        return remap, autoremap, tuple(remapped), tuple(literals), other
+
     def _build_subtree(self, elem: etree._Element, doc: XMLDocument, record: SubtreeRecord, prefix: str,
                        stack: list[str]) -> TreeNode:
         sub_id = elem.get("ID")
@@ -325,48 +372,22 @@ class TreeBuilder:
             if rule is not None:  # BT.CPP builds the substitute in its place and expands nothing
                 return self._build_substituted_subtree(rule, name_attr or sub_id, cfg, attrs, record, doc, elem)
 
+        plan = self._subtree_plans.get((sub_id, items := tuple(attrs.items())))
+        if plan is None:
+            plan = self._subtree_plans[(sub_id, items)] = self._subtree_plan(sub_id, attrs, doc, elem)
+        remap, autoremap, remapped, literals, other = plan
         child_bb = Blackboard(parent=record.blackboard)
-        remap: dict[str, str] = {}
-        autoremap = False
-        for attr, value in attrs.items():
-            if value == "{=}":
-                value = "{" + attr + "}"
-            if attr == "_autoremap":
-                try:
-                    autoremap = parse_bool(value)
-                except BehaviorTreeException:
-                    raise self._err(doc, elem, f"_autoremap must be true or false, got '{value}'") from None
-                continue
-            if not _allowed_port_name(attr):
-                continue
-            remap[attr] = value
         child_bb.enable_auto_remapping(autoremap)
-        model = self.registry.subtree_models.get(sub_id)
-        if model and not autoremap:
-            for port_name, port in model.items():
-                if port_name in remap:
-                    continue
-                if not port.has_default:
-                    raise self._err(doc, elem, f"In the <TreeNodesModel> the <Subtree ID=\"{sub_id}\"> is "
-                                               f"defining a mandatory port called [{port_name}], but you are "
-                                               "not remapping it")
-                remap[port_name] = port.default_string()
-        for internal, value in remap.items():
-            key = blackboard_key(value, internal) if is_strict_blackboard_pointer(value.strip(" ")) else None
-            if key is not None:
-                child_bb.add_subtree_remapping(internal, key)
-            else:
-                literal = subtree_literal(value)
-                entry_type = (STRING if isinstance(literal, str) else
-                              DOUBLE if isinstance(literal, float) else
-                              INT if -(2**31) <= literal < 2**31 else INT64)
+        for internal, key in remapped:
+            child_bb.add_subtree_remapping(internal, key)
+        if literals:
+            local = child_bb.local_entries()
+            for internal, literal, entry_type in literals:
                 entry = Entry(entry_type)
                 entry.write(literal)
-                child_bb.local_entries()[internal] = entry
-        cfg.input_ports = remap
-        cfg.other_attributes = {k: v for k, v in attrs.items() if k not in remap and k not in ("ID", "name")
-                                and k not in PRE_CONDITIONS and k not in POST_CONDITIONS}
-        cfg.other_attributes.setdefault("_autoremap", "true" if autoremap else "false")
+                local[internal] = entry
+        cfg.input_ports = dict(remap)
+        cfg.other_attributes = dict(other)
         try:
             node = self.factory.builders["SubTree"](name_attr or sub_id, cfg)
         except BehaviorTreeException as exc:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import warnings
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -40,8 +41,9 @@ class TreeDefinition:
     element: etree._Element  # the <BehaviorTree> element
     document: XMLDocument
 
-    @property
+    @cached_property
     def root_element(self) -> etree._Element:
+        """(kept: a subtree used in many places is expanded as often)"""
         return element_children(self.element)[0]
 
 
