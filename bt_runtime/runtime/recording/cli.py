@@ -95,9 +95,9 @@ class Recording:
 
         opts = self.options
         try:
-            from .channels import ChannelSet
+            import foxglove  # noqa: F401 - the extra's packages are there
 
-            channels = ChannelSet()
+            from .channels import ChannelSet
         except ImportError as exc:
             raise RecordingError(f"recording needs the [record] extra (pip install 'bt_runtime[record]'): "
                                  f"{exc}") from None
@@ -105,12 +105,12 @@ class Recording:
             if self.bag is not None:
                 from .bag import Rosbag2Bag
 
-                self.writer = Rosbag2Bag(self.bag, channels, compression=opts.compression,
+                self.writer = Rosbag2Bag(self.bag, ChannelSet(), compression=opts.compression,
                                          custom_data=self.custom_data)
             if self.foxglove_port is not None:
                 from .live import FoxgloveLive
 
-                self.live = FoxgloveLive(channels, self.foxglove_port, self.foxglove_host)
+                self.live = FoxgloveLive(ChannelSet(), self.foxglove_port, self.foxglove_host)
         except (OSError, RuntimeError) as exc:
             if self.writer is not None:  # the bag folder was made for nothing: leave no empty bag
                 with contextlib.suppress(OSError):
@@ -118,7 +118,7 @@ class Recording:
                 self.writer = None
             raise RecordingError(f"{exc}") from None
         state = ConvertState(frames=opts.frames, tf_topic=opts.topics.tf, robot_time=robot_clock(runtime.driver))
-        pipeline = RecordPipeline(channels, bag=self.writer, live=self.live, state=state,
+        pipeline = RecordPipeline(bag=self.writer, live=self.live, state=state, live_rate_hz=opts.live_rate_hz,
                                   queue_size=opts.queue_size, flush_interval_s=opts.flush_interval_s,
                                   latched_topics=tuple(t for t in (opts.topics.tf_static, opts.topics.map) if t))
         self.recorder = Recorder(runtime, pipeline, opts, hooks)

@@ -52,5 +52,8 @@ class RecordingOptions(BaseModel):
                                       "tick (cheap); 'changes': every status transition (Nav2's RosTopicLogger), a "
                                       "tick that repeats the previous one not logged again; 'all': every tick's "
                                       "transitions (see tree_log.py for what each costs)")
+    live_rate_hz: float = Field(10.0, ge=0, description="the live view sends odometry (and its /tf), imu and "
+                                "the ground truth at most this often per topic, a viewing rate; the bag keeps "
+                                "every message (0: every message live too)")
     cmd_vel_repeat_s: float = Field(0.1, ge=0, description="an unchanged gate output (same command and "
                                     "source) is recorded again only after this many robot seconds (0: always)")

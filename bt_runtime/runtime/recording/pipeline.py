@@ -3,8 +3,11 @@
 ``put`` is all the loop pays per message: a length check and a deque append (no conversion,
 no serialization, no I/O). When the queue is full the message is dropped and counted per
 topic, never waited for. The thread converts (``convert``: CDR bytes for the high-rate types,
-rosbags messages serialized once by ``types`` for the others) and logs the bytes on the topic's channel, which feeds the bag's open segment and the live server;
-every ``flush_interval_s`` wall seconds it closes the bag's segment. It works in slices of at
+rosbags messages serialized once by ``types`` for the others) and logs the same bytes on the
+topic's channel of each sink: the bag (every message, into its open segment) and the live
+server (its own channels: only topics a client subscribed to, and the high-rate streams at
+``live_rate_hz``, a viewing rate); every ``flush_interval_s`` wall seconds it closes the bag's
+segment. It works in slices of at
 most ``slice_s`` (0.5 ms) and then releases the GIL; in real time it also keeps out of the
 millisecond before each tick deadline (``tick_guard``), so the tick finds the GIL free.
 """
@@ -34,15 +37,21 @@ LATCHED_TYPES = {"nav_msgs/msg/OccupancyGrid"}
 # kinds whose conversion has one output (on the item's topic) and keeps no state
 SKIPPABLE = {"scan", "imu", "battery", "plan", "command", "tree_log", "diagnostics", "supervisor_event",
              "gate_event", "event"}
+# the high-rate streams the live view sends at a viewing rate (the bag keeps every message)
+VIEWING_RATE_KINDS = ("odom", "imu", "odometry")
 
 
 class RecordPipeline:
-    def __init__(self, channels: ChannelSet, *, bag: Rosbag2Bag | None = None, live: FoxgloveLive | None = None,
+    def __init__(self, *, bag: Rosbag2Bag | None = None, live: FoxgloveLive | None = None,
                  state: ConvertState | None = None, queue_size: int = 20_000, flush_interval_s: float = 5.0,
-                 latched_topics: tuple[str, ...] = (), slice_s: float = 0.0005):
-        self.channels = channels
+                 latched_topics: tuple[str, ...] = (), slice_s: float = 0.0005, live_rate_hz: float = 0.0):
         self.bag = bag
         self.live = live
+        # each sink's channels (a separate foxglove context each, so the live view can skip what the bag keeps)
+        self.sinks: list[ChannelSet] = [x.channels for x in (bag, live) if x is not None]
+        period_ns = int(round(1e9 / live_rate_hz)) if live_rate_hz > 0 else 0
+        self.live_period_ns = dict.fromkeys(VIEWING_RATE_KINDS, period_ns) if period_ns else {}
+        self._live_next: dict[tuple[str, str], int] = {}  # (kind, topic) -> earliest log time of the next live send
         self.state = state or ConvertState()
         self.queue_size = queue_size
         self.flush_interval_s = flush_interval_s
@@ -126,46 +135,66 @@ class RecordPipeline:
             self._stop.wait(0.02)
 
     def _write_one(self, kind: str, topic: str, t: float, payload: Any) -> None:
-        bag = self.bag
+        bag, live = self.bag, self.live
         try:
             if kind == "advertise":  # a channel made before its first message (payload: its type)
-                if topic not in self.channels.channels:
-                    self._add_channel(topic, payload)
+                self._add_channel(topic, payload)
                 return
-            if bag is None:
-                if kind in SKIPPABLE and self._unwatched(topic):
-                    return  # live view only: nothing to convert for a topic nobody watches
+            t_ns = max(0, int(round(self.state.robot(t) * 1e9)))  # log time: robot time
+            checked = False  # _live_due already said yes (for the only output)
+            if bag is None:  # live view only: convert nothing a client will not get
+                if kind in SKIPPABLE and topic in live.channels.channels:
+                    if not self._live_due(kind, topic, t_ns):
+                        return
+                    checked = True
                 if kind == "odom" and self._unwatched(topic) and self._unwatched(self.state.tf_topic):
                     self.state.odom_pose = (payload.pose.x, payload.pose.y, payload.pose.yaw)  # for map -> odom
                     return
             elif bag.idle:
                 bag.open_segment()
-            t_ns = max(0, int(round(self.state.robot(t) * 1e9)))  # log time: robot time
-            loggers, written = self.channels.loggers, self.written
+            written = self.written
             for name, typename, msg in CONVERTERS[kind](self.state, topic, t, payload):
-                logger = loggers.get(name)
-                if logger is None:
+                if name not in self.sinks[0].loggers:
                     self._add_channel(name, typename)
-                    logger = loggers[name]
-                if bag is None and self._unwatched(name):
-                    continue  # live view only, and nobody subscribed to this topic
+                to_live = live is not None and (checked or self._live_due(kind, name, t_ns))
+                if bag is None and not to_live:
+                    continue
                 data = msg if type(msg) is bytes else serialize(msg, typename)
                 if bag is not None:
                     bag.count(name, t_ns)
-                logger(data, t_ns, None)
-                if self.live is not None:
-                    self.live.sent(name, t_ns, data)
+                    bag.channels.loggers[name](data, t_ns, None)
+                if to_live:
+                    live.channels.loggers[name](data, t_ns, None)
+                    live.sent(name, t_ns, data)
                 written[name] = written.get(name, 0) + 1
         except Exception as exc:
             self.errors += 1
             if self.errors <= 5:
                 log.error("recording_message_failed", kind=kind, topic=topic, error=repr(exc))
 
+    def _live_due(self, kind: str, topic: str, t_ns: int) -> bool:
+        """Send this message to the live view: a latched topic always (kept for later
+        subscribers), others when a client subscribed, the high-rate kinds at most at the viewing rate."""
+        channels = self.live.channels
+        if topic in channels.latched:
+            return True
+        if not channels.channels[topic].has_sinks():
+            return False
+        period = self.live_period_ns.get(kind)
+        if period:
+            key = (kind, topic)
+            if t_ns < self._live_next.get(key, -1):
+                return False
+            self._live_next[key] = t_ns + period
+        return True
+
     def _add_channel(self, topic: str, typename: str) -> None:
         latched = topic in self.latched_topics or typename in LATCHED_TYPES
-        self.channels.add(topic, typename, latched=latched)
+        for channels in self.sinks:
+            channels.add(topic, typename, latched=latched)
 
     def _unwatched(self, topic: str) -> bool:
         """Live view only: a topic with a channel, no subscriber, and nothing to keep for later ones."""
-        channel = self.channels.channels.get(topic)
-        return channel is not None and not channel.has_sinks() and topic not in self.channels.latched
+        channels = self.live.channels
+        channel = channels.channels.get(topic)
+        return channel is not None and not channel.has_sinks() and topic not in channels.latched

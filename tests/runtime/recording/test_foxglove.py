@@ -133,3 +133,72 @@ def test_every_topic_is_advertised_before_its_first_message():
     assert {"/scan", "/odom", "/tf", "/cmd_vel", "/cmd_vel/teleop", "/behavior_tree_log", "/sim/ground_truth",
             "/map"} <= set(expected)
     assert advertised == expected
+
+
+def test_live_view_sends_high_rate_streams_at_the_viewing_rate_and_the_bag_keeps_all(tmp_path):
+    """50 Hz odometry for 2 robot seconds: the bag gets all 100 (and their /tf), a subscribed
+    live client gets 10 Hz (live_rate_hz), commands unthrottled; nothing is sent to a topic
+    nobody subscribed to."""
+    import threading
+
+    from websockets.sync.client import connect
+
+    from bt_runtime.runtime.messages import Odometry, Pose2D, Twist
+    from bt_runtime.runtime.recording.bag import Rosbag2Bag
+    from bt_runtime.runtime.recording.channels import ChannelSet
+    from bt_runtime.runtime.recording.live import FoxgloveLive
+    from bt_runtime.runtime.recording.pipeline import RecordPipeline
+
+    bag = Rosbag2Bag(tmp_path / "bag", ChannelSet())
+    live = FoxgloveLive(ChannelSet(), port=0)
+    pipeline = RecordPipeline(bag=bag, live=live, live_rate_hz=10.0)
+    for topic, typename in {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
+                            "/cmd_vel": "geometry_msgs/msg/Twist", "/imu": "sensor_msgs/msg/Imu"}.items():
+        pipeline._write_one("advertise", topic, 0.0, typename)
+    got: dict[str, int] = {}
+    done = threading.Event()
+    try:
+        with connect(live.url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]) as ws:
+            subs: dict[int, str] = {}
+            deadline = time.monotonic() + 30
+            while not {"/odom", "/cmd_vel"} <= set(subs.values()) and time.monotonic() < deadline:
+                msg = json.loads(ws.recv(timeout=30))
+                if msg.get("op") == "advertise":
+                    batch = []
+                    for ch in msg["channels"]:
+                        if ch["topic"] in ("/odom", "/cmd_vel"):
+                            subs[len(subs) + 1] = ch["topic"]
+                            batch.append({"id": len(subs), "channelId": ch["id"]})
+                    ws.send(json.dumps({"op": "subscribe", "subscriptions": batch}))
+            channels = live.channels.channels
+            while not (channels["/odom"].has_sinks() and channels["/cmd_vel"].has_sinks()):
+                assert time.monotonic() < deadline, "the server never saw the subscriptions"
+                time.sleep(0.05)
+
+            def receive() -> None:
+                while not done.is_set():
+                    try:
+                        frame = ws.recv(timeout=0.5)
+                    except TimeoutError:
+                        continue
+                    if isinstance(frame, bytes) and frame[0] == 0x01:
+                        topic = subs[struct.unpack_from("<I", frame, 1)[0]]
+                        got[topic] = got.get(topic, 0) + 1
+
+            reader = threading.Thread(target=receive)
+            reader.start()
+            for k in range(100):
+                t = 0.02 * k
+                pipeline._write_one("odom", "/odom", t, Odometry(t, Pose2D(0.01 * k, 0.0, 0.0), Twist(0.5, 0.0)))
+                pipeline._write_one("command", "/cmd_vel", t, Twist(0.5, 0.0))
+            deadline = time.monotonic() + 20
+            while (got.get("/odom", 0) < 20 or got.get("/cmd_vel", 0) < 100) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            time.sleep(0.3)  # anything more would have arrived by now
+            done.set()
+            reader.join()
+    finally:
+        pipeline.stop()
+    assert pipeline.errors == 0
+    assert bag.message_counts() == {"/odom": 100, "/tf": 100, "/cmd_vel": 100}
+    assert got == {"/odom": 20, "/cmd_vel": 100}  # /tf: nobody subscribed
