@@ -35,6 +35,16 @@ class GoalStatusIs(ConditionNode):
         return SUCCESS if self.get_input("status", "") == self.get_input("value", "") else FAILURE
 
 
+class OnCharger(ConditionNode):
+    """SUCCESS if the last battery message says a charger is connected: CHARGING, or FULL on the
+    charger. Nav2's ``IsBatteryCharging`` tests CHARGING only, so a robot left full on its dock
+    would drive off without undocking."""
+
+    def tick(self) -> NodeStatus:
+        msg = latest(self, "battery")
+        return SUCCESS if isinstance(msg, BatteryState) and msg.on_charger else FAILURE
+
+
 class ChargeUntil(DecoratorNode):
     """RUNNING while the robot charges; SUCCESS once the child (a condition, ticked every tick)
     succeeds or the state of charge reaches ``full`` percent; FAILURE when the battery monitor

@@ -53,3 +53,11 @@ def test_goal_status_is_fails_before_any_goal():
     tree, _ = build('<GoalStatusIs value="CHARGING"/>', register=(register_autonomy_nodes,),
                     bb_init={"goal_status": "CHARGING"})
     assert tree.tick_exactly_once() is S
+
+
+def test_on_charger_holds_while_charging_and_when_full_on_the_charger():
+    tree, ctx = build('<OnCharger/>', register=(register_autonomy_nodes,))
+    assert tree.tick_exactly_once() is F  # no battery message yet: not known to be docked
+    for status, expected in ((POWER_SUPPLY_CHARGING, S), (POWER_SUPPLY_FULL, S), (POWER_SUPPLY_DISCHARGING, F)):
+        reading(ctx, 100.0, status)
+        assert tree.tick_exactly_once() is expected, status
