@@ -41,9 +41,21 @@ def path_turning(points, start_yaw: float) -> float:
     return total
 
 
+def return_energy(goal: Pose2D, dock: Pose2D | None, detour_factor: float, speed: float, turn_rate: float,
+                  robot) -> float:
+    """Wh (nominal) to get from ``goal`` back to ``dock``: the straight line times the detour
+    factor and a half turn, as for a goal with no plan (the way back is not planned yet);
+    0 without a dock."""
+    if dock is None:
+        return 0.0
+    return energy_for_path(goal.distance_to(dock) * detour_factor, math.pi, speed, turn_rate, robot)
+
+
 class BatteryCanReach(ConditionNode):
     """SUCCESS if the state of charge covers the energy to reach ``goal`` (along ``path`` if
-    given) times ``safety_factor``, plus ``reserve`` percent. Writes the estimate."""
+    given) and then get back to ``dock`` (when the robot has one: a robot must never be left
+    where it cannot reach its charger), times the learned factor and ``safety_factor``, plus
+    ``reserve`` percent. Writes the estimate."""
 
     @classmethod
     def provided_ports(cls):
@@ -53,6 +65,8 @@ class BatteryCanReach(ConditionNode):
                 input_port("safety_factor", float, 1.5),
                 input_port("detour_factor", float, 1.5, "used without a path"),
                 input_port("speed", float, 0.0, "m/s (0: the robot's nominal speed)"),
+                input_port("dock", POSE, "{dock_pose}",
+                           "the dock to get back to after the goal (none: no return trip counted)"),
                 output_port("required", float, "{battery_required}", "percent needed incl. reserve"),
                 output_port("available", float, "{battery_available}", "percent now"),
                 output_port("energy_factor", float, "{battery_energy_factor}",
@@ -77,7 +91,11 @@ class BatteryCanReach(ConditionNode):
         else:
             length = pose.distance_to(goal) * self.get_input("detour_factor")
             turning = math.pi
-        energy = energy_for_path(length, turning, speed, min(robot.max_angular, 1.0), robot)
+        turn_rate = min(robot.max_angular, 1.0)
+        energy = energy_for_path(length, turning, speed, turn_rate, robot)
+        dock = self.get_input("dock", None)
+        energy += return_energy(goal, dock if isinstance(dock, Pose2D) else None, self.get_input("detour_factor"),
+                                speed, turn_rate, robot)
         if self._model is not None:
             energy = self._model.energy(energy)
             self.set_output("energy_factor", self._model.factor)

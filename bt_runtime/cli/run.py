@@ -240,6 +240,9 @@ async def _run_async(args: argparse.Namespace, tree_path: Path, config: Any, reg
     world = getattr(getattr(driver, "sim", None), "world", None)
     goals = [parse_goal(g, world) for g in args.goal]
     bb = runtime.tree.root_blackboard
+    dock = getattr(getattr(driver, "sim", None), "dock", None)
+    if dock is not None:  # the simulated world's dock (configuration, as opennav_docking's dock database)
+        bb.set("dock_pose", dock)
     for assignment in args.set:
         key, value = parse_assignment(assignment)
         bb.set(key, value)

@@ -135,6 +135,8 @@ class ScenarioRun:
         bb = rt.tree.root_blackboard
         if self.mode == "with":
             bb.set("goal_status", "IDLE")
+            if driver.sim.dock is not None:  # configuration, as opennav_docking's dock database
+                bb.set("dock_pose", driver.sim.dock)
         recording = None
         if self.bag is not None:
             from .bags import start_bag

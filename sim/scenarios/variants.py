@@ -363,9 +363,11 @@ def collision_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
 # -- battery -------------------------------------------------------------------------------------
 
 # What the battery check of trees/autonomy.xml asks for (nodes/battery.py): the energy of the
-# planned path by the nominal model, times the learned factor (nodes/energy.py), times 1.5, plus
-# a 10 % reserve, converted to percent at the measured voltage.
-SAFETY_FACTOR, RESERVE = 1.5, 10.0
+# planned path and of the way back to the dock (straight line x 1.5 and a half turn) by the
+# nominal model, times the learned factor (nodes/energy.py), times 1.5, plus a 10 % reserve,
+# converted to percent at the measured voltage. From the dock, charging stops once the goal
+# passes the same check with a 20 % reserve (it must do so below BatteryAbove's 95 %).
+SAFETY_FACTOR, RESERVE, CHARGE_RESERVE, DETOUR_FACTOR = 1.5, 10.0, 20.0, 1.5
 PATH_SLACK = 0.05  # the layer plans on its own costmap from its estimated pose: +-5 % path energy
 SOC_NOISE = 0.3  # three sigmas of the state-of-charge reading's noise (percentage points)
 CHECK_BY = 3.0  # s: the near goal is checked by then (far goal at 1 s, refused, near goal 1 s later)
@@ -397,6 +399,20 @@ def _nominal_wh(world: str, robot: str, start, goal, info) -> float:
     length = float(np.hypot(*np.diff(pts[:, :2], axis=0).T).sum())
     return energy_for_path(length, path_turning(pts, start[2]), min(info.max_linear, SPEED),
                            min(info.max_angular, 1.0), info)
+
+
+def _dock(world: str, robot: str):
+    """The world's dock pose (what the runner puts on the layer's blackboard as ``dock_pose``)."""
+    return _planner(world, robot)[1].dock.to_pose()
+
+
+def _return_wh(world: str, robot: str, goal, info) -> float:
+    """The layer's nominal energy (Wh) for the way back from ``goal`` to the dock."""
+    from bt_runtime.runtime.messages import Pose2D
+    from nodes.battery import return_energy
+
+    return return_energy(Pose2D(*goal[:2]), _dock(world, robot), DETOUR_FACTOR, min(info.max_linear, SPEED),
+                         min(info.max_angular, 1.0), info)
 
 
 def _required_percent(info, spec, energy_wh: float, factor: float, soc: float) -> float:
@@ -440,7 +456,7 @@ def battery_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
     accept the near goal and refuse the far one (``_battery_band``; the far goal's energy
     counted from the near pose, plus the near trip's over the safety factor, which is what the
     near trip leaves of the charge), and keeps enough, after the near trip, to reach the dock
-    (the layer's battery check does not reserve the trip to the dock). The charger is fast
+    (with the hungriest unit and slack: the layer's check reserves it by its model). The charger is fast
     (50 W) "for rapid testing"."""
     world = "apartment"
     robot = _choice(rng, ROBOTS)
@@ -456,10 +472,18 @@ def battery_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
         if path_length(world, robot, staging[:2], far[:2]) > 4.0 * math.dist(staging[:2], far[:2]):
             continue  # RatePathQuality (max_length_ratio 5) would reject every plan from the dock
         near_wh = _nominal_wh(world, robot, start, near, info)
-        band = _battery_band(info, spec, _nominal_wh(world, robot, near, far, info) + near_wh / SAFETY_FACTOR,
-                             near_wh)
+        far_back_wh = _return_wh(world, robot, far, info)
+        band = _battery_band(info, spec, _nominal_wh(world, robot, near, far, info) + far_back_wh
+                             + near_wh / SAFETY_FACTOR, near_wh + _return_wh(world, robot, near, info))
         if band is None:
             continue
+        from nodes.energy import EnergyModel
+
+        dock = _dock(world, robot)
+        charged_wh = (_nominal_wh(world, robot, (dock.x, dock.y, dock.yaw), far, info) + far_back_wh) \
+            * EnergyModel.factor_bounds()[1]
+        if info.percent_for(charged_wh, spec.voltage(90.0)) * SAFETY_FACTOR + CHARGE_RESERVE > 90.0:
+            continue  # the charge the layer waits for on the dock must be well below full
         dock_wh = (near_wh + _nominal_wh(world, robot, near, staging, info)) * 1.2  # the hungriest unit, and slack
         lowest = max(band[0], info.percent_for(dock_wh, spec.voltage_empty) + 2.0)
         if lowest < band[1]:

@@ -49,9 +49,10 @@ def _context():
     return ctx
 
 
-def _can_reach(ctx, *, path=None, **attrs):
+def _can_reach(ctx, *, path=None, dock=None, **attrs):
     extra = "".join(f' {k}="{v}"' for k, v in attrs.items())
-    bb = {"goal": Pose2D(1.0, 0.0)} | ({"path": path} if path is not None else {})
+    bb = {"goal": Pose2D(1.0, 0.0)} | ({"path": path} if path is not None else {}) \
+        | ({"dock_pose": dock} if dock is not None else {})
     ports = ' path="{path}"' if path is not None else ""  # no path: the straight line x detour
     tree, _ = build(f'<BatteryCanReach goal="{{goal}}"{ports}{extra}/>', ctx, register=(register_autonomy_nodes,),
                     bb_init=bb)
@@ -118,3 +119,29 @@ def test_refuse_goal_marks_the_goal_refused():
                     bb_init={"goal": Pose2D(3.0, 4.0), "goal_status": "ACTIVE"})
     assert tree.tick_once() is S
     assert tree.root_blackboard.get("goal_status") == "REFUSED"
+
+
+def test_the_way_back_to_the_dock_is_part_of_what_a_goal_needs():
+    """A goal 1 m away is in range; with the dock 8 m beyond it, the way back (straight line x
+    the detour factor, a half turn) must fit too, with the same factor and margin."""
+    ctx = _context()
+    ctx.backup.pose(0.0, 0.0, 0.0)
+    ctx.backup.battery(11.0, voltage=11.0)
+    alone = _can_reach(ctx)
+    assert alone.tick_once() is S
+    far_dock = _can_reach(ctx, dock=Pose2D(9.0, 0.0, 0.0))
+    assert far_dock.tick_once() is F  # 1 m there is fine, 8 m back is not
+    bb = far_dock.root_blackboard
+    factor = bb.get("battery_energy_factor")
+    back = energy_for_path(8.0 * 1.5, math.pi, 0.22, 1.0, BURGER)
+    assert bb.get("battery_required") == pytest.approx(
+        alone.root_blackboard.get("battery_required") + 1.5 * factor * back / 11.0 / 1.8 * 100)
+    near_dock = _can_reach(ctx, dock=Pose2D(1.0, 0.2, 0.0))  # the dock beside the goal costs little
+    assert near_dock.tick_once() is S
+
+
+def test_the_dock_can_be_given_as_text():
+    ctx = _context()
+    ctx.backup.pose(0.0, 0.0, 0.0)
+    ctx.backup.battery(11.0, voltage=11.0)
+    assert _can_reach(ctx, dock="9.0;0.0;0.0").tick_once() is F  # e.g. run --set dock_pose=9;0;0
