@@ -50,7 +50,10 @@ async def test_hostile_groot_client_causes_no_tick_overrun():
     # costliest request: far below the 10 ms period, it cannot cause an overrun.
     assert server.max_request_cost < 0.002
     assert server.requests_refused >= 1  # the 50-part message (the 16 MB and 200 MB frames never reach the loop)
-    if baseline == 0:  # a machine quiet enough to judge overruns directly
+    # Overruns are judged directly only on a machine with a core to spare: on a starved one (the
+    # load average above the core count) a tick misses its 10 ms now and then whatever the
+    # server does, and a quiet 1.5 s before the attack does not vouch for the seconds of it.
+    if baseline == 0 and os.getloadavg()[0] < (os.cpu_count() or 1):
         assert overruns == 0
 
 
