@@ -337,8 +337,12 @@ def _emit(node: Node, names: dict[str, str]) -> Fn:
     if isinstance(node, Assign):
         if isinstance(node.target, Name):
             key = names.get(node.target.name, node.target.name)
-            general = make_assign(node.op, key, _emit(node.value, names))
-            return shortcut_assign(node.op, key, node.value, names, general) or general
+            value = node.value
+
+            def build_general() -> Fn:  # made only if needed: most statements never need it
+                return make_assign(node.op, key, _emit(value, names))
+
+            return shortcut_assign(node.op, key, value, names, build_general) or build_general()
         return make_bad_assign(node.op)
     raise TypeError(f"unknown AST node {node!r}")
 
@@ -347,7 +351,7 @@ def _emit(node: Node, names: dict[str, str]) -> Fn:
 
 # A run of identifier characters where the lexer starts an identifier token (not inside a number
 # such as 1e5, 0x1f or the error token 3foo, which the look-behind leaves alone).
-_IDENTIFIER = re.compile(r"(?<![A-Za-z0-9_@.])[A-Za-z_][A-Za-z0-9_]*")
+_IDENTIFIER = re.compile(r"(?<![A-Za-z0-9_@.])([A-Za-z_][A-Za-z0-9_]*)")  # split() keeps the names
 # Texts the template path leaves to the plain parse: string literals and '@' (identifiers inside
 # them), non-ASCII, and an identifier right after a dot ('a..b', '65.x'), which the look-behind
 # would leave unrenamed where it could collide with a placeholder.
@@ -365,10 +369,11 @@ def _parse_via_template(text: str) -> tuple[list[Node], dict[str, str]] | None:
     those of the text, so it parses exactly when the text does, into the same tree."""
     if _NOT_TEMPLATE.search(text) is not None or _MARK in text:
         return None
-    found = _IDENTIFIER.findall(text)
+    parts = _IDENTIFIER.split(text)  # [text, name, text, name, ..., text]: one pass
+    found = parts[1::2]
     if "true" in found or "false" in found:  # literals, not variables: no template
         return None
-    key = _IDENTIFIER.sub(_MARK, text)
+    key = _MARK.join(parts[0::2])
     cached = _templates.get(key, EMPTY)
     if cached is EMPTY:
         pieces = key.split(_MARK)

@@ -3,12 +3,15 @@
 the variable it reads); these do the whole statement in one call when every entry involved
 already exists and holds a double (or, for a copy or a constant, the destination's own kind),
 and otherwise call the general closure, which holds the full rules. The fast path has no side
-effect before it decides, so the two can never disagree on what a statement does.
+effect before it decides (finding an entry only fills the blackboard's look-up memory), so the
+two can never disagree on what a statement does. The general closure is built on first use:
+a statement that always takes the fast path never pays for it at load.
 """
 
 from __future__ import annotations
 
 import operator
+from collections.abc import Callable
 from time import monotonic_ns as _monotonic_ns
 from typing import Any
 
@@ -31,9 +34,23 @@ def _number(node: Node) -> float | None:
     return None
 
 
-def shortcut_assign(op: str, key: str, value: Node, names: dict[str, str], general: Fn) -> Fn | None:
-    """A one-frame closure for ``key op value`` that falls back on ``general``, or None when
-    the statement has no shortcut. ``value`` is folded; ``names`` renames its variables."""
+def _deferred(build: Callable[[], Fn]) -> Fn:
+    """``build()(bb, enums)``, with ``build`` called once, on first use."""
+    general = None
+
+    def general_closure(bb, enums):
+        nonlocal general
+        if general is None:
+            general = build()
+        return general(bb, enums)
+    return general_closure
+
+
+def shortcut_assign(op: str, key: str, value: Node, names: dict[str, str], build: Callable[[], Fn]) -> Fn | None:
+    """A one-frame closure for ``key op value`` that falls back on the general closure
+    ``build()`` makes, or None when the statement has no shortcut. ``value`` is folded;
+    ``names`` renames its variables."""
+    general = _deferred(build)  # (a closure that is dropped when there is no shortcut)
     if op in ("+=", "-=", "*=", "/="):
         number = _number(value)
         if number is None or (op == "/=" and number == 0.0):
@@ -64,7 +81,7 @@ def shortcut_assign(op: str, key: str, value: Node, names: dict[str, str], gener
 def _update_by_constant(key: str, arith, number: float, plus: bool, general: Fn) -> Fn:
     if plus:
         def add_constant(bb, enums):
-            entry = bb._resolved.get(key)
+            entry = bb._resolved.get(key) or bb.get_entry(key)
             if entry is not None:
                 old = entry.value
                 if type(old) is float:
@@ -77,7 +94,7 @@ def _update_by_constant(key: str, arith, number: float, plus: bool, general: Fn)
         return add_constant
 
     def update_by_constant(bb, enums):
-        entry = bb._resolved.get(key)
+        entry = bb._resolved.get(key) or bb.get_entry(key)
         if entry is not None:
             old = entry.value
             if type(old) is float:
@@ -94,7 +111,7 @@ def _assign_same_kind(key: str, constant: float | str, general: Fn) -> Fn:
     kind = type(constant)
 
     def assign_constant(bb, enums):
-        entry = bb._resolved.get(key)
+        entry = bb._resolved.get(key) or bb.get_entry(key)
         if entry is not None and type(entry.value) is kind:
             entry.value = constant
             entry.sequence_id += 1
@@ -109,7 +126,7 @@ def _assign_int_to_double(key: str, constant: int, general: Fn) -> Fn:
     number = float(constant)
 
     def assign_int_constant(bb, enums):
-        entry = bb._resolved.get(key)
+        entry = bb._resolved.get(key) or bb.get_entry(key)
         if entry is not None and type(entry.value) is float:
             entry.value = number
             entry.sequence_id += 1
@@ -122,8 +139,8 @@ def _assign_int_to_double(key: str, constant: int, general: Fn) -> Fn:
 def _copy(key: str, source: str, general: Fn) -> Fn:
     def copy(bb, enums):
         resolved = bb._resolved
-        entry = resolved.get(key)
-        src = resolved.get(source)
+        entry = resolved.get(key) or bb.get_entry(key)
+        src = resolved.get(source) or bb.get_entry(source)
         if entry is not None and src is not None and not (enums and source in enums):
             value = src.value
             kind = type(value)
@@ -139,8 +156,8 @@ def _copy(key: str, source: str, general: Fn) -> Fn:
 def _assign_name_plus(key: str, source: str, number: float, general: Fn) -> Fn:
     def assign_plus(bb, enums):
         resolved = bb._resolved
-        entry = resolved.get(key)
-        src = resolved.get(source)
+        entry = resolved.get(key) or bb.get_entry(key)
+        src = resolved.get(source) or bb.get_entry(source)
         if entry is not None and src is not None and not (enums and source in enums):
             x = src.value
             if type(x) is float and type(entry.value) is float:
@@ -156,8 +173,8 @@ def _assign_name_plus(key: str, source: str, number: float, general: Fn) -> Fn:
 def _assign_name_arith(key: str, source: str, arith, number: float, general: Fn) -> Fn:
     def assign_arith(bb, enums):
         resolved = bb._resolved
-        entry = resolved.get(key)
-        src = resolved.get(source)
+        entry = resolved.get(key) or bb.get_entry(key)
+        src = resolved.get(source) or bb.get_entry(source)
         if entry is not None and src is not None and not (enums and source in enums):
             x = src.value
             if type(x) is float and type(entry.value) is float:
