@@ -259,9 +259,10 @@ class MarkObstacle(AsyncActionNode):
     With a contact ``arc`` the mark covers it: discs of ``radius`` just outside the body along
     the arc, extended ``margin`` m past each end (the chord plus a margin), so corner and
     oblique hits are covered; ``outward`` m further on the far side of a touch off to one side
-    of the front (the obstacle lies that way). Nothing is marked where the body stands now. A
-    hit within ``merge_distance`` of an earlier
-    mark grows that mark. Without an arc, one disc at ``point``."""
+    of the front (the obstacle lies that way); rows of discs up to ``depth`` m behind the arc
+    (the body behind the touched surface). Nothing is marked where the body stands now. A hit
+    within ``merge_distance`` of an earlier mark grows that mark. Without an arc, one disc at
+    ``point``."""
 
     @classmethod
     def provided_ports(cls):
@@ -270,6 +271,8 @@ class MarkObstacle(AsyncActionNode):
                 input_port("margin", float, 0.1, "m past each end of the arc"),
                 input_port("outward", float, 0.15, "m more past the end away from the heading when the "
                                                     "touch was off to one side of the front"),
+                input_port("depth", float, 0.0, "m: rows of discs this far behind the touched arc (the "
+                                                 "body behind the surface; 0: the arc only)"),
                 input_port("merge_distance", float, 0.3, "m: a hit this close to a mark grows it"),
                 output_port("mark", int, "{collision_mark}", "index of the mark made or grown")]
 
@@ -279,6 +282,7 @@ class MarkObstacle(AsyncActionNode):
         arc = self.get_input("arc", None)
         if isinstance(arc, ContactArc):
             points = arc.chord(arc.radius + radius, self.get_input("margin"), self.get_input("outward"))
+            points = arc.behind(points, self.get_input("depth"), radius)
             # where the body stands now (it backed out) is free space: a wide arc (two bumper
             # segments, plus margins) reaches behind the contact and must not mark it
             pose = robot_pose(self)

@@ -63,6 +63,22 @@ class ContactArc:
         start = self.bearing - self.half_width - lo
         return [self.point_at(start + span * i / n, reach) for i in range(n + 1)]
 
+    def behind(self, points: list[tuple[float, float]], depth: float, step: float) -> list[tuple[float, float]]:
+        """``points`` repeated in rows ``step`` apart up to ``depth`` m further along the arc's
+        middle bearing (parallel rows, so the mark gets deeper, not wider). What stopped the
+        robot has a body behind the surface it touched: a box touched at its corner or near an
+        edge extends past the touched arc, and a re-plan that passes the mark's end and turns
+        back behind it touches that part (the second touches of the collision variants)."""
+        if depth <= 0 or step <= 0:
+            return list(points)
+        c, s = math.cos(self.bearing), math.sin(self.bearing)
+        rows = max(1, math.ceil(depth / step - 1e-9))
+        out = list(points)
+        for k in range(1, rows + 1):
+            d = min(depth, k * step)
+            out.extend((x + d * c, y + d * s) for x, y in points)
+        return out
+
     def to_string(self) -> str:
         text = f"{self.x:g};{self.y:g};{self.bearing:g};{self.half_width:g};{self.radius:g}"
         return text + (f";{self.heading:g}" if math.isfinite(self.heading) else "")

@@ -105,3 +105,38 @@ def test_a_touch_off_to_one_side_is_marked_further_on_that_side():
     ahead = ContactArc(0.0, 0.0, *segments_arc(spans, (0,)), 0.22, heading=0.0)
     assert ahead.chord(0.32, 0.05, outward=0.15) == ahead.chord(0.32, 0.05)
     assert ContactArc(0.0, 0.0, middle, half, 0.22).chord(0.32, 0.05, 0.15) == plain  # heading unknown
+
+
+def test_rows_behind_the_arc_make_the_mark_deeper_not_wider():
+    """A 0.3 m box touched at its near face extends 0.3 m behind it: the mark gets parallel
+    rows up to `depth` behind the arc, along the contact bearing, and no wider across it."""
+    arc = ContactArc(0.0, 0.0, 0.0, 0.35, 0.155)  # touched straight ahead (+x)
+    row = arc.chord(0.255, 0.05)
+    deep = arc.behind(row, 0.2, 0.1)
+    assert len(deep) == 3 * len(row) and deep[:len(row)] == row
+    assert max(x for x, _ in deep) == pytest.approx(max(x for x, _ in row) + 0.2)
+    assert min(y for _, y in deep) == pytest.approx(min(y for _, y in row))
+    assert max(y for _, y in deep) == pytest.approx(max(y for _, y in row))
+    assert arc.behind(row, 0.0, 0.1) == row
+
+
+def test_a_box_touched_at_its_corner_is_covered_behind_the_corner():
+    """A rosbot drove north into the bottom corner of a 0.3 m box turned 45 degrees (a
+    diamond): the arc alone leaves the box's side corners and middle unmarked (a re-plan around
+    the mark's end touched them again); with 0.2 m of rows behind it every part of the box lies
+    within the robot's radius of a disc, so a path that keeps the robot's radius from the discs
+    cannot touch the box."""
+    radius, disc = 0.155, 0.1
+    corner = (0.0, 0.0)
+    box = [corner, (0.212, 0.212), (0.0, 0.424), (-0.212, 0.212)]
+    arc = ContactArc(0.0, -radius, math.pi / 2, 0.35, radius, heading=math.pi / 2)
+    row = arc.chord(radius + disc, 0.05)
+
+    def uncovered(points):
+        samples = [(a[0] + (b[0] - a[0]) * k / 10, a[1] + (b[1] - a[1]) * k / 10)
+                   for a, b in zip(box, box[1:] + box[:1]) for k in range(10)]
+        return [p for p in samples
+                if min(math.hypot(p[0] - x, p[1] - y) for x, y in points) > disc + radius]
+
+    assert uncovered(row)  # the arc alone
+    assert not uncovered(arc.behind(row, 0.2, disc))
