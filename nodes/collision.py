@@ -12,15 +12,19 @@ from __future__ import annotations
 
 import math
 
+import structlog
+
 from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActionNode, SyncActionNode
 from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.messages import Contact, Imu, Pose2D, wrap_angle
 
 from .contact import ContactArc, marks_of, segments_arc
 from .robot import robot_pose
+from .stall import MotionMismatch
 from .types import CONTACT_ARC, POSE
 
 SUCCESS, FAILURE, RUNNING = NodeStatus.SUCCESS, NodeStatus.FAILURE, NodeStatus.RUNNING
+log = structlog.get_logger("nodes.collision")
 
 
 def bumper_arc(context, contact) -> tuple[float, float] | None:
@@ -73,24 +77,32 @@ class ImpactDetector:
 
 
 class CollisionDetected(ConditionNode):
-    """SUCCESS while the bumper is pressed or just after an impact (IMU spike); writes the
-    contact arc's middle bearing (robot frame, rad, 0 = ahead) and its half width."""
+    """SUCCESS while the bumper is pressed, just after an impact (IMU spike), or just after the
+    IMU and the wheels disagreed (a glancing push or blocked motion, ``nodes.stall``); writes
+    the contact arc's middle bearing (robot frame, rad, 0 = ahead) and its half width."""
 
     @classmethod
     def provided_ports(cls):
-        return [input_port("source", str, "any", "bumper | imu | any"),
+        return [input_port("source", str, "any", "bumper | imu | motion | any"),
                 input_port("imu_threshold", float, 6.0, "m/s^2; well above the base's acceleration limits"),
                 input_port("imu_window", float, 0.25, "s of IMU history to look at"),
                 input_port("imu_spread", float, 0.35, "rad either side of the impact direction (the "
                                                       "direction, placed with the pose estimate, was "
                                                       "within 0.23 rad of the true contact in the "
                                                       "collision variants)"),
+                input_port("motion_threshold", float, 1.0, "m/s^2 of acceleration beyond what the base "
+                                                           "can do (its ramp forwards, v*w sideways)"),
+                input_port("stall_speed", float, 0.08, "m/s: wheels this fast while the body stops"),
+                input_port("motion_spread", float, 0.6, "rad either side of a glancing push or the "
+                                                        "blocked direction of travel"),
                 output_port("direction", float, "{collision_direction}"),
                 output_port("spread", float, "{collision_spread}", "rad either side of direction")]
 
     def __init__(self, name, config=None):
         super().__init__(name, config)
         self._impacts = ImpactDetector()
+        self._motion = MotionMismatch()
+        self._reported = None
 
     def tick(self):
         ctx = self.context
@@ -106,6 +118,17 @@ class CollisionDetected(ConditionNode):
             if impact is not None:
                 self.set_output("direction", impact[1])
                 self.set_output("spread", float(self.get_input("imu_spread")))
+                return SUCCESS
+        if source in ("motion", "any"):
+            sensed = self._motion(ctx, threshold=self.get_input("motion_threshold"),
+                                  stall_speed=self.get_input("stall_speed"), stall_window=0.4,
+                                  window=self.get_input("imu_window"))
+            if sensed is not None:
+                if self._motion.event is not self._reported:
+                    self._reported = self._motion.event
+                    log.info("contact_from_motion", kind=sensed[1], bearing=round(sensed[0], 2))
+                self.set_output("direction", sensed[0])
+                self.set_output("spread", float(self.get_input("motion_spread")))
                 return SUCCESS
         return FAILURE
 
