@@ -24,7 +24,7 @@ from .types import type_hash
 class Rosbag2Bag:
     """Not thread-safe: the writer thread owns it."""
 
-    def __init__(self, path: str | Path, channels: ChannelSet, *, compression: str = "zstd",
+    def __init__(self, path: str | Path, channels: ChannelSet, *, compression: str = "lz4",
                  custom_data: dict[str, str] | None = None):
         self.path = Path(path)
         if self.path.exists() and (not self.path.is_dir() or any(self.path.iterdir())):

@@ -89,6 +89,7 @@ class Recording:
     def start(self, runtime: AutonomyRuntime, hooks: RecordingHooks | None = None) -> Recording:
         if not self.enabled:
             return self
+        from ..clock import is_virtual
         from .convert import ConvertState
         from .pipeline import RecordPipeline
         from .recorder import Recorder
@@ -122,7 +123,7 @@ class Recording:
                                   queue_size=opts.queue_size, flush_interval_s=opts.flush_interval_s,
                                   latched_topics=tuple(t for t in (opts.topics.tf_static, opts.topics.map) if t))
         self.recorder = Recorder(runtime, pipeline, opts, hooks)
-        pipeline.start()
+        pipeline.start(on_loop=is_virtual())  # virtual time: drained on the loop (pipeline.py says why)
         self.recorder.attach()
         return self
 

@@ -46,7 +46,10 @@ class RecordingOptions(BaseModel):
                                                 "everything up to the last one)")
     diagnostics_period_s: float = Field(1.0, gt=0, description="robot seconds between /diagnostics")
     map_check_period_s: float = Field(0.5, gt=0, description="robot seconds between map-change checks")
-    compression: str = Field("zstd", pattern="^(zstd|lz4|none)$")
+    compression: str = Field("lz4", pattern="^(zstd|lz4|none)$",
+                             description="MCAP chunk compression: lz4 (default) costs a run ~2 % less CPU than "
+                                         "zstd for larger files; every reader (rosbags, mcap, Foxglove, ros2 bag) "
+                                         "reads both")
     tree_log: str = Field("states", pattern="^(states|changes|all)$",
                           description="'states': after each tick, the nodes whose status changed since the last "
                                       "tick (cheap); 'changes': every status transition (Nav2's RosTopicLogger), a "

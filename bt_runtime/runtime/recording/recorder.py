@@ -33,6 +33,7 @@ log = structlog.get_logger("bt_runtime.recording")
 # driver stream -> (converter kind, TopicNames field)
 SENSOR_STREAMS = (("scan", "scan", "scan"), ("odom", "odom", "odom"), ("pose", "pose", "tf"),
                   ("imu", "imu", "imu"), ("battery", "battery", "battery"), ("plan", "plan", "plan"))
+DRAIN_PERIOD_S = 0.25  # virtual time: robot seconds between drains of the queue (~45 messages)
 GATE_SOURCE_TOPIC = {"tree": "tree"}  # gate sources whose command the gate holds (no stream of their own)
 
 
@@ -46,6 +47,7 @@ class Recorder:
         self.clock = runtime.clock
         self._unsubscribe: list[Callable[[], None]] = []
         self._task: asyncio.Task | None = None
+        self._drain_task: asyncio.Task | None = None
         self.tree_log: Any = None  # tree_log.TreeStateLog or TreeTransitionLog
         self._last_output: tuple[Any, str] | None = None
         self._last_output_t = -1e18
@@ -90,6 +92,8 @@ class Recorder:
             put("tf_static", topics.tf_static, clock(), self.hooks.laser_offset)
         self._check_map()
         self._task = asyncio.get_running_loop().create_task(self._periodic(), name="recording")
+        if getattr(self.pipeline, "on_loop", False):  # virtual time: the writer's work is done here, between ticks
+            self._drain_task = asyncio.get_running_loop().create_task(self._drain(), name="recording.drain")
         self.attached = True
 
     def topics(self) -> dict[str, str]:
@@ -146,8 +150,9 @@ class Recorder:
         if rt.tick_loop is not None:
             with contextlib.suppress(ValueError):
                 rt.tick_loop.on_tick.remove(self._on_tick)
-        if self._task is not None:
-            self._task.cancel()
+        for task in (self._task, self._drain_task):
+            if task is not None:
+                task.cancel()
         if self.tree_log is not None:
             self.tree_log.close()
         self._diagnostics()
@@ -201,6 +206,13 @@ class Recorder:
             if self.tree_log is not None:
                 self.tree_log.flush()  # status changes outside ticks (halts, restarts)
             await asyncio.sleep(period)
+
+    async def _drain(self) -> None:
+        """Virtual time only (the pipeline has no thread): write what is queued every
+        ``DRAIN_PERIOD_S`` robot seconds; the loop's work takes no robot time there."""
+        while True:
+            await asyncio.sleep(DRAIN_PERIOD_S)
+            self.pipeline.drain()
 
     def _diagnostics(self) -> None:
         topic = self.options.topics.diagnostics

@@ -51,18 +51,15 @@ def test_a_collision_mark_records_the_map_again(tmp_path):
     assert int((after == 100).sum()) > int((before == 100).sum()), "the mark is in the second map"
 
 
-def test_a_full_queue_drops_and_counts(tmp_path):
+def test_a_full_queue_drops_and_counts(tmp_path, monkeypatch):
     async def body(driver) -> None:
         await asyncio.sleep(2.0)
 
     from bt_runtime.runtime.recording import pipeline
 
-    original = pipeline.RecordPipeline.start
-    pipeline.RecordPipeline.start = lambda self: None  # a writer that never runs: the queue fills up
-    try:
-        report = _record(tmp_path / "bag", RecordingOptions(queue_size=100), body)
-    finally:
-        pipeline.RecordPipeline.start = original
+    # a writer that never runs (on virtual time the writer is the loop's drain): the queue fills up
+    monkeypatch.setattr(pipeline.RecordPipeline, "drain", lambda self: None)
+    report = _record(tmp_path / "bag", RecordingOptions(queue_size=100), body)
     assert report["dropped"].get("/odom", 0) > 0 and report["dropped"].get("/imu", 0) > 0
     assert report["message_count"] == 0  # the run went on: 2 s of robot time with nothing written
 
