@@ -18,6 +18,7 @@ from ..ports import EMPTY
 from ..status import FAILURE, SUCCESS
 from .assign import make_assign, make_bad_assign
 from .errors import CastError, ScriptError, ScriptRuntimeError
+from .node_ticks import condition_node_tick, script_node_tick
 from .operators import binary, compare, ieee_div, unary
 from .parser import Assign, Binary, Compare, Literal, Name, Node, ParseError, Ternary, Unary, parse
 from .shortcuts import shortcut_assign
@@ -183,6 +184,7 @@ def _compare_one(op: str, lf: Fn, rf: Fn, right: Node, left: Node | None = None)
                 if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
                     return 0.0 if fails(x, rv) else 1.0
                 return 1.0 if compare(op, x, const, enums) else 0.0
+            name_order_number.shape = ("order", key, fails, rv)  # type: ignore[attr-defined]  # node_ticks
             return name_order_number
         if op in ("==", "!="):
             same, differ = (1.0, 0.0) if op == "==" else (0.0, 1.0)
@@ -422,7 +424,7 @@ class Script:
                     raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
                 return SUCCESS
 
-            tick = self._action_tick = script_tick
+            tick = self._action_tick = script_node_tick(fn, script_tick) or script_tick
         return tick
 
     def condition_tick(self) -> Any:
@@ -444,7 +446,7 @@ class Script:
                     return SUCCESS if value != 0.0 else FAILURE
                 return SUCCESS if to_bool(value) else FAILURE
 
-            tick = self._condition_tick = script_condition_tick
+            tick = self._condition_tick = condition_node_tick(fn, script_condition_tick) or script_condition_tick
         return tick
 
     def run(self, blackboard, enums: dict[str, int] | None = None) -> Any:

@@ -4,7 +4,8 @@ the variable it reads); these do the whole statement in one call when every entr
 already exists and holds a double (or, for a copy or a constant, the destination's own kind),
 and otherwise call the general closure, which holds the full rules. The fast path has no side
 effect before it decides (finding an entry only fills the blackboard's look-up memory), so the
-two can never disagree on what a statement does. The general closure is built on first use:
+two can never disagree on what a statement does. Each closure's ``shape`` describes it, so
+``node_ticks`` can make the whole tick of a Script node holding just that statement. The general closure is built on first use:
 a statement that always takes the fast path never pays for it at load.
 """
 
@@ -91,6 +92,7 @@ def _update_by_constant(key: str, arith, number: float, plus: bool, general: Fn)
                     entry.stamp = _monotonic_ns()
                     return new
             return general(bb, enums)
+        add_constant.shape = ("update", key, operator.add, number)  # type: ignore[attr-defined]
         return add_constant
 
     def update_by_constant(bb, enums):
@@ -104,6 +106,7 @@ def _update_by_constant(key: str, arith, number: float, plus: bool, general: Fn)
                 entry.stamp = _monotonic_ns()
                 return new
         return general(bb, enums)
+    update_by_constant.shape = ("update", key, arith, number)  # type: ignore[attr-defined]
     return update_by_constant
 
 
@@ -118,6 +121,7 @@ def _assign_same_kind(key: str, constant: float | str, general: Fn) -> Fn:
             entry.stamp = _monotonic_ns()
             return constant
         return general(bb, enums)
+    assign_constant.shape = ("constant", key, kind, constant)  # type: ignore[attr-defined]
     return assign_constant
 
 
@@ -133,6 +137,7 @@ def _assign_int_to_double(key: str, constant: int, general: Fn) -> Fn:
             entry.stamp = _monotonic_ns()
             return number
         return general(bb, enums)
+    assign_int_constant.shape = ("constant", key, float, number)  # type: ignore[attr-defined]
     return assign_int_constant
 
 
@@ -150,6 +155,7 @@ def _copy(key: str, source: str, general: Fn) -> Fn:
                 entry.stamp = _monotonic_ns()
                 return value
         return general(bb, enums)
+    copy.shape = ("copy", key, source)  # type: ignore[attr-defined]
     return copy
 
 
@@ -167,6 +173,7 @@ def _assign_name_plus(key: str, source: str, number: float, general: Fn) -> Fn:
                 entry.stamp = _monotonic_ns()
                 return new
         return general(bb, enums)
+    assign_plus.shape = ("arith", key, source, operator.add, number)  # type: ignore[attr-defined]
     return assign_plus
 
 
@@ -184,5 +191,6 @@ def _assign_name_arith(key: str, source: str, arith, number: float, general: Fn)
                 entry.stamp = _monotonic_ns()
                 return new
         return general(bb, enums)
+    assign_arith.shape = ("arith", key, source, arith, number)  # type: ignore[attr-defined]
     return assign_arith
 

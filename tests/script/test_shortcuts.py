@@ -145,8 +145,51 @@ def test_script_nodes_tick_through_their_scripts_one_call_tick() -> None:
         '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
         '<Script code="n += 1"/><ScriptCondition code="n &gt; 1"/></Sequence></BehaviorTree></root>', bb)
     script_node, condition_node = tree.root_node.children
-    assert script_node._cell.fast.__name__ == "script_tick"
-    assert condition_node._cell.fast.__name__ == "script_condition_tick"
+    assert script_node._cell.fast.__name__ == "add_tick"  # node_ticks: the statement is the tick
+    assert condition_node._cell.fast.__name__ == "order_tick"
     assert tree.tick_exactly_once() is NodeStatus.FAILURE
     assert tree.tick_exactly_once() is NodeStatus.SUCCESS
     assert bb.get("n") == 2.0
+
+
+NODE_CODES = [("Script", t) for t in STATEMENTS if ";" not in t and not t.startswith("!")] + [
+    ("ScriptCondition", t) for t in ("x > 0", "y < 2", "x >= -1", "@y <= 3", "x != 1", "y")]
+
+
+@pytest.mark.parametrize(("tag", "code"), NODE_CODES)
+def test_one_call_node_ticks_do_what_the_node_tick_does(tag: str, code: str) -> None:
+    """node_ticks.py: ticking a Script/ScriptCondition through its one-call tick gives the
+    status, error and blackboard that its general ``tick()`` gives, for every kind of entry."""
+    from bt_runtime import BehaviorTreeFactory
+
+    forget_compiled()
+    tree = BehaviorTreeFactory().create_tree_from_text(
+        f'<root BTCPP_format="4"><BehaviorTree ID="Main"><{tag} code="{code.replace(">", "&gt;").replace("<", "&lt;")}"/>'
+        '</BehaviorTree></root>')
+    node = tree.root_node
+    fast = node._cell.fast
+    if tag == "Script" or code[0] in "x@" and code.split()[1] in ("<", ">", "<=", ">="):
+        assert fast is not type(node).tick and fast.__name__.endswith("_tick")
+
+    def outcome(tick, prep_x, prep_y, enums) -> list:
+        bb = Blackboard()
+        prep_x(bb, "x")
+        prep_y(bb, "y")
+        node.config.blackboard = bb
+        node.config.enums = enums
+        seen = []
+        for _ in range(2):
+            try:
+                seen.append(("ok", tick(node)))
+            except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
+                seen.append(("error", type(exc), str(exc)))
+            for key in ("x", "y"):
+                entry = bb.get_entry(key)
+                seen.append(None if entry is None else (key, type(entry.value), repr(entry.value), entry.type.name,
+                                                        entry.sequence_id))
+        return seen
+
+    for (x_name, prep_x), (y_name, prep_y), enums in itertools.product(
+            STATES.items(), STATES.items(), ({}, {"y": 9, "Z": 1})):
+        expected = outcome(type(node).tick, prep_x, prep_y, enums)
+        assert outcome(fast, prep_x, prep_y, enums) == expected, (code, x_name, y_name, enums)

@@ -1,0 +1,138 @@
+"""The whole tick of a Script node whose code is one shortcut statement (``x += 1``,
+``x := y * 2``...) and of a ScriptCondition comparing a variable with a number (``x > 0``), in
+one call: what a parent calls for such a node, instead of the node's tick calling the script.
+
+Each handles only entries already found and holding doubles (or, for a constant or a copy, the
+destination's own kind), with no side effect before it decides, and otherwise calls ``slow``,
+the node's general tick, which holds every rule and reports errors. The statement forms are
+read from the ``shape`` of the compiled closures (shortcuts.py, compiler.py).
+"""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Callable
+from time import monotonic_ns as _monotonic_ns
+from typing import Any
+
+from ..status import FAILURE, SUCCESS, NodeStatus
+
+NodeTick = Callable[[Any], NodeStatus]
+
+
+def script_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
+    """A one-call tick for a Script node whose compiled script is ``fn``, or None."""
+    shape = getattr(fn, "shape", None)
+    if shape is None:
+        return None
+    kind = shape[0]
+    if kind == "update":
+        return _update(*shape[1:], slow)
+    if kind == "arith":
+        return _arith(*shape[1:], slow)
+    if kind == "constant":
+        return _constant(*shape[1:], slow)
+    if kind == "copy":
+        return _copy(*shape[1:], slow)
+    return None
+
+
+def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
+    """A one-call tick for a ScriptCondition node whose compiled script is ``fn``, or None."""
+    shape = getattr(fn, "shape", None)
+    if shape is None or shape[0] != "order":
+        return None
+    _, key, fails, number = shape
+
+    def order_tick(node):
+        cfg = node.config
+        entry = cfg.blackboard._resolved.get(key)
+        if entry is not None:
+            enums = cfg.enums
+            if not (enums and key in enums):
+                x = entry.value
+                if type(x) is float:
+                    return FAILURE if fails(x, number) else SUCCESS
+        return slow(node)
+    return order_tick
+
+
+def _update(key: str, arith: Callable[[float, float], float], number: float, slow: NodeTick) -> NodeTick:
+    if arith is operator.add:
+        def add_tick(node):
+            entry = node.config.blackboard._resolved.get(key)
+            if entry is not None:
+                old = entry.value
+                if type(old) is float:
+                    entry.value = old + number  # entry.write(...), inlined
+                    entry.sequence_id += 1
+                    entry.stamp = _monotonic_ns()
+                    return SUCCESS
+            return slow(node)
+        return add_tick
+
+    def update_tick(node):
+        entry = node.config.blackboard._resolved.get(key)
+        if entry is not None:
+            old = entry.value
+            if type(old) is float:
+                entry.value = arith(old, number)
+                entry.sequence_id += 1
+                entry.stamp = _monotonic_ns()
+                return SUCCESS
+        return slow(node)
+    return update_tick
+
+
+def _arith(key: str, source: str, arith: Callable[[float, float], float], number: float,
+           slow: NodeTick) -> NodeTick:
+    plus = arith is operator.add
+
+    def arith_tick(node):
+        cfg = node.config
+        resolved = cfg.blackboard._resolved
+        entry = resolved.get(key)
+        src = resolved.get(source)
+        if entry is not None and src is not None:
+            enums = cfg.enums
+            if not (enums and source in enums):
+                x = src.value
+                if type(x) is float and type(entry.value) is float:
+                    entry.value = x + number if plus else arith(x, number)
+                    entry.sequence_id += 1
+                    entry.stamp = _monotonic_ns()
+                    return SUCCESS
+        return slow(node)
+    return arith_tick
+
+
+def _constant(key: str, kind: type, constant: Any, slow: NodeTick) -> NodeTick:
+    def constant_tick(node):
+        entry = node.config.blackboard._resolved.get(key)
+        if entry is not None and type(entry.value) is kind:
+            entry.value = constant
+            entry.sequence_id += 1
+            entry.stamp = _monotonic_ns()
+            return SUCCESS
+        return slow(node)
+    return constant_tick
+
+
+def _copy(key: str, source: str, slow: NodeTick) -> NodeTick:
+    def copy_tick(node):
+        cfg = node.config
+        resolved = cfg.blackboard._resolved
+        entry = resolved.get(key)
+        src = resolved.get(source)
+        if entry is not None and src is not None:
+            enums = cfg.enums
+            if not (enums and source in enums):
+                value = src.value
+                kind = type(value)
+                if (kind is float or kind is str) and type(entry.value) is kind:
+                    entry.value = value
+                    entry.sequence_id += 1
+                    entry.stamp = _monotonic_ns()
+                    return SUCCESS
+        return slow(node)
+    return copy_tick
