@@ -25,6 +25,7 @@ cells, with no static layer (as in the TurtleBot3 parameters).
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
 import numpy as np
 from scipy import ndimage
@@ -91,6 +92,30 @@ def combine_unknown(inflated: np.ndarray, unknown: np.ndarray) -> np.ndarray:
     if not unknown.any():
         return inflated
     return np.where(unknown & (inflated < INSCRIBED), np.uint8(NO_INFORMATION), inflated)
+
+
+_INFLATED: OrderedDict[tuple, np.ndarray] = OrderedDict()  # (layers' bytes, shape, inflator) -> costs
+_INFLATED_MAX = 16
+
+
+def _inflated_master(inflator: Inflator, base: np.ndarray) -> np.ndarray:
+    """The whole map's inflated costs from its combined layers (a new array).
+
+    A campaign worker builds a costmap of the same map for every run, and every "clear entire
+    costmap" recomputes it from the static layer alone: the result depends only on the layers'
+    values and the inflation parameters, so it is kept per process (keyed by the values
+    themselves) and each caller gets a copy."""
+    key = (base.tobytes(), base.shape, inflator.resolution, inflator.inscribed_radius,
+           inflator.inflation_radius, inflator.cost_scaling_factor)
+    costs = _INFLATED.get(key)
+    if costs is None:
+        costs = combine_unknown(inflator.costs(base == LETHAL), base == NO_INFORMATION)
+        _INFLATED[key] = costs
+        if len(_INFLATED) > _INFLATED_MAX:
+            _INFLATED.popitem(last=False)
+    else:
+        _INFLATED.move_to_end(key)
+    return costs.copy()
 
 
 class _Rays:
@@ -291,8 +316,7 @@ class GlobalCostmap(Costmap2D):
 
     def _recompute_all(self) -> None:
         full = (slice(0, self.height), slice(0, self.width))
-        base = self._base(full)
-        new = combine_unknown(self.inflator.costs(base == LETHAL), base == NO_INFORMATION)
+        new = _inflated_master(self.inflator, self._base(full))
         if not np.array_equal(new, self.cost):
             self.cost = new
             self.version += 1

@@ -1,4 +1,4 @@
-"""A campaign worker's per-process caches (world, map raster, planner graph) never change a run:
+"""A campaign worker's per-process caches (world, map raster, planner graph, inflated static costmap) never change a run:
 the same seed gives the same trajectory and verdicts with cold and with warm caches."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from sim import raster_cache, world
-from sim.nav import planner
+from sim.nav import costmap, planner
 from sim.scenarios.runner import run_scenario
 from sim.scenarios.spec import load_scenario
 
@@ -15,6 +15,7 @@ def _cold() -> None:
     world._LOADED.clear()
     raster_cache._CACHE.clear()
     planner._GRAPHS.clear()
+    costmap._INFLATED.clear()
 
 
 def test_cold_and_warm_caches_give_the_same_run() -> None:
