@@ -11,6 +11,40 @@ def tree_xml(body: str) -> str:
 IDLE_TREE = tree_xml('<KeepRunningUntilFailure><AlwaysSuccess/></KeepRunningUntilFailure>')
 
 
+# DDS domain ids for the tests: 100..229 (Cyclone DDS takes 0..232; 0 is ROS' default, left to users)
+_FIRST_DOMAIN, _DOMAINS = 100, 130
+_held_domains: dict[int, object] = {}
+
+
+def dds_domain() -> int:
+    """A DDS domain id that no other test of this run, and no other test run on this machine
+    (another pytest, an xdist worker), is using: two tests that shared a domain would see each
+    other's robots. Held by an exclusive lock on a file per id until this process ends, never
+    handed out twice by it (a killed robot's DDS participant lingers for its lease)."""
+    import fcntl
+    import os
+    import tempfile
+    from pathlib import Path
+
+    folder = Path(tempfile.gettempdir()) / f"bt_runtime_dds_domains_{os.getuid()}"
+    folder.mkdir(exist_ok=True)
+    start = os.getpid() % _DOMAINS  # concurrent runs start apart, so they rarely probe the same files
+    for i in range(_DOMAINS):
+        domain = _FIRST_DOMAIN + (start + i) % _DOMAINS
+        if domain in _held_domains:
+            continue
+        lock = open(folder / f"{domain}.lock", "w")  # noqa: SIM115 - held (open) until the process exits
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            continue
+        _held_domains[domain] = lock
+        return domain
+    raise RuntimeError(f"every DDS domain id {_FIRST_DOMAIN}..{_FIRST_DOMAIN + _DOMAINS - 1} is in use "
+                       f"(locks in {folder})")
+
+
 class SimRobotProcess:
     """``sim-robot`` in its own process on DDS domain ``domain`` (the DDS end-to-end tests).
 

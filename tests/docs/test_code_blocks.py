@@ -66,6 +66,18 @@ def blocks() -> list[Block]:
 BLOCKS = blocks()
 
 
+_DOMAIN: list[int] = []
+
+
+def _docs_domain() -> int:
+    """One DDS domain for the blocks of this run (a block's background robot ends with its block)."""
+    if not _DOMAIN:
+        from tests.helpers import dds_domain
+
+        _DOMAIN.append(dds_domain())
+    return _DOMAIN[0]
+
+
 def _env(tmp: Path) -> dict[str, str]:
     bin_dir = tmp / "bin"
     bin_dir.mkdir(exist_ok=True)
@@ -74,7 +86,7 @@ def _env(tmp: Path) -> dict[str, str]:
         wrapper.write_text(f'#!/bin/sh\nexec "{sys.executable}" "$@"\n')
         wrapper.chmod(0o755)
     env = dict(os.environ, PYTHONPATH=str(ROOT), PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}",
-               ROS_DOMAIN_ID=str(200 + os.getpid() % 30), NO_COLOR="1")
+               ROS_DOMAIN_ID=str(_docs_domain()), NO_COLOR="1")
     env.pop("CYCLONEDDS_URI", None)
     return env
 

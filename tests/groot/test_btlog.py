@@ -118,8 +118,13 @@ def test_killed_writer_leaves_a_valid_file(tmp_path: Path) -> None:
         if proc.poll() is None:
             proc.kill()
     assert proc.returncode == -signal.SIGKILL
-    report = btlog_check(path)
-    assert report["passed"], (report["required_failed"], report["advisory_failed"])
+    # Linux checks for a fatal signal between the pages of a write(): a SIGKILL that lands while
+    # a flush is being written can cut it at a page boundary, leaving part of one record at the
+    # end (nothing user space can prevent). Every whole record must pass --strict, and a cut
+    # record is the only thing allowed to fail.
+    report = btlog_check(path, "--allow-truncated")
+    assert not report["required_failed"], report["required_failed"]
+    assert set(report["advisory_failed"]) <= {"records_are_whole_9_byte_units"}, report["advisory_failed"]
     assert report["summary"]["transitions"]["count"] >= 2000
 
 

@@ -6,7 +6,6 @@ each sample on Cyclone's receive thread (so a blocked event loop does not skew i
 from __future__ import annotations
 
 import asyncio
-import itertools
 import os
 import signal
 import subprocess
@@ -20,11 +19,9 @@ pytest.importorskip("cyclonedds")
 from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
 from bt_runtime.runtime.config import RuntimeConfig  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
-from tests.helpers import tree_xml  # noqa: E402
+from tests.helpers import dds_domain, tree_xml  # noqa: E402
 from tests.paths import ROOT  # noqa: E402
 from tests.safety.support import Received, StallLoop, register_fault_nodes  # noqa: E402
-
-_DOMAINS = itertools.count()
 
 
 @pytest.fixture(autouse=True)
@@ -34,7 +31,7 @@ def loopback(monkeypatch):
 
 @pytest.fixture
 def domain() -> int:
-    return 100 + (os.getpid() + 41 * next(_DOMAINS) + 17) % 100
+    return dds_domain()
 
 
 class DdsBase:

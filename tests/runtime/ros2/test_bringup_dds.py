@@ -21,7 +21,7 @@ from bt_runtime.runtime.goal_intake import GoalState  # noqa: E402
 from bt_runtime.runtime.messages import Pose2D  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
 from bt_runtime.runtime.supervisor import Health  # noqa: E402
-from tests.helpers import SimRobotProcess, tree_xml  # noqa: E402
+from tests.helpers import SimRobotProcess, dds_domain, tree_xml  # noqa: E402
 from tests.helpers import wait_until as wait_for  # noqa: E402
 from tests.paths import ROOT  # noqa: E402
 
@@ -34,7 +34,7 @@ GOAL_TREE = tree_xml('<KeepRunningUntilFailure><SetBlackboard value="{goal_statu
 
 @pytest.fixture(scope="module")
 def domain() -> int:
-    return 100 + (os.getpid() + 53) % 100
+    return dds_domain()
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,6 @@ truth, read by the test only). One sim-robot process for every check."""
 
 import json
 import math
-import os
 
 import pytest
 
@@ -16,7 +15,7 @@ pytest.importorskip("cyclonedds")
 from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
 from bt_runtime.runtime.messages import POWER_SUPPLY_CHARGING, ActionStatus  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
-from tests.helpers import IDLE_TREE, SimRobotProcess  # noqa: E402
+from tests.helpers import IDLE_TREE, SimRobotProcess, dds_domain  # noqa: E402
 from tests.helpers import wait_until as wait_for  # noqa: E402
 
 STAGING = (-3.9, -1.0)  # the apartment's dock (-4.6, -1.0) facing west, staging 0.7 m behind it
@@ -28,7 +27,7 @@ def loopback(monkeypatch):
 
 
 async def test_dock_robot_and_undock_robot_over_dds():
-    domain = 100 + (os.getpid() + 11 * 37) % 100
+    domain = dds_domain()
     robot = SimRobotProcess(domain, "--robot", "burger", "--spawn=-3.6,-1.0,3.1416", "--nav-autostart",
                             duration=90.0)
     try:

@@ -12,11 +12,12 @@ import pytest
 
 pytest.importorskip("cyclonedds")
 
+from tests.helpers import dds_domain  # noqa: E402
 from tests.paths import ROOT  # noqa: E402
 
 
 def test_sim_robot_then_run_reaches_the_goal(tmp_path):
-    env = dict(os.environ, PYTHONPATH=str(ROOT), ROS_DOMAIN_ID=str(150 + os.getpid() % 50))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), ROS_DOMAIN_ID=str(dds_domain()))
     env.pop("CYCLONEDDS_URI", None)
     robot = subprocess.Popen([sys.executable, "-m", "bt_runtime", "sim-robot", "--loopback", "--duration", "150"],
                              cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -14,9 +14,7 @@
 
 import asyncio
 import contextlib
-import itertools
 import math
-import os
 import time
 
 import pytest
@@ -29,7 +27,7 @@ from bt_runtime.runtime.messages import Pose2D  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
 from bt_runtime.runtime.supervisor import Health  # noqa: E402
 from bt_runtime.status import FAILURE, SUCCESS  # noqa: E402
-from tests.helpers import SimRobotProcess  # noqa: E402
+from tests.helpers import SimRobotProcess, dds_domain  # noqa: E402
 from tests.helpers import wait_until as wait_for  # noqa: E402
 from tests.paths import ROOT
 
@@ -43,14 +41,10 @@ def loopback(monkeypatch):
     monkeypatch.setenv("CYCLONEDDS_URI", dds.loopback_config())
 
 
-_DOMAINS = itertools.count()
-
-
 @pytest.fixture
 def domain() -> int:
-    """A DDS domain id per test (100..199): distinct for every test of this process (a killed
-    robot's participant lingers for its lease), offset by the process id (other test runs)."""
-    return 100 + (os.getpid() + 37 * next(_DOMAINS)) % 100
+    """A DDS domain id per test (a killed robot's participant lingers for its lease)."""
+    return dds_domain()
 
 
 @contextlib.asynccontextmanager

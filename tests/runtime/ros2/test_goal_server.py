@@ -18,7 +18,7 @@ pytest.importorskip("cyclonedds")
 
 from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
-from tests.helpers import SimRobotProcess, wait_until  # noqa: E402
+from tests.helpers import SimRobotProcess, dds_domain, wait_until  # noqa: E402
 from tests.paths import ROOT  # noqa: E402
 
 S = idl.GoalStatus
@@ -107,7 +107,7 @@ def speed(driver) -> float:
 async def test_navigate_to_pose_from_a_plain_dds_client():
     import nodes
 
-    domain = 100 + (os.getpid() * 7 + 13) % 100  # its own DDS domain (other test runs: other pids)
+    domain = dds_domain()
     robot = SimRobotProcess(domain, "--robot", "burger", duration=90)
     client_node = None
     try:

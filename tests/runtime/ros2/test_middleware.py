@@ -26,7 +26,7 @@ import pytest
 pytest.importorskip("cyclonedds")
 
 from bt_runtime.runtime.ros2 import dds, idl  # noqa: E402
-from tests.helpers import wait_until  # noqa: E402
+from tests.helpers import dds_domain, wait_until  # noqa: E402
 
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR little endian (XCDR1), as every ROS 2 RMW writes
 GUID = bytes(range(0x10, 0x20))  # an RTPS GUID: 12-byte prefix + 4-byte entity id
@@ -96,7 +96,7 @@ def loopback(monkeypatch):
 async def test_services_and_actions_over_dds_with_the_rpc_basic_mapping():
     """Our client and server in rpc_basic mode over DDS: a service call and an action goal with
     its result (send_goal, get_result: three services)."""
-    domain = 100 + (os.getpid() + 71) % 100
+    domain = dds_domain()
     node = dds.DdsNode(domain, loop=asyncio.get_running_loop(), service_mapping="rpc_basic",
                        namespace=f"middleware_{os.getpid()}")  # names no other test run uses
     try:

@@ -10,9 +10,7 @@ does a recording of the run (``--record``): its log times and header stamps are 
 import asyncio
 import importlib.util
 import io
-import itertools
 import json
-import os
 import time
 
 import pytest
@@ -23,15 +21,13 @@ from bt_runtime.logging_setup import configure_logging  # noqa: E402
 from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
 from bt_runtime.runtime.supervisor import Health  # noqa: E402
-from tests.helpers import IDLE_TREE, SimRobotProcess, wait_until  # noqa: E402
-
-_DOMAINS = itertools.count()
+from tests.helpers import IDLE_TREE, SimRobotProcess, dds_domain, wait_until  # noqa: E402
 
 
 @pytest.fixture
 def domain(monkeypatch) -> int:
     monkeypatch.setenv("CYCLONEDDS_URI", dds.loopback_config())
-    return 100 + (os.getpid() + 43 * next(_DOMAINS) + 29) % 100
+    return dds_domain()
 
 
 async def test_republished_old_data_is_stale_and_logs_carry_ros_time(domain, tmp_path):

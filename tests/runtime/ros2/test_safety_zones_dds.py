@@ -5,7 +5,6 @@ came over DDS, halts the robot short of the wall. The simulator's ground truth (
 
 import asyncio
 import math
-import os
 
 import pytest
 
@@ -16,7 +15,7 @@ from bt_runtime.runtime.config import RuntimeConfig, SafetyZonesSettings  # noqa
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
 from bt_runtime.runtime.safety_zones import STREAM  # noqa: E402
 from sim.world import load_world  # noqa: E402
-from tests.helpers import BLIND_TREE, STOP_ZONE_YAML, SimRobotProcess, register_blind_driving  # noqa: E402
+from tests.helpers import BLIND_TREE, STOP_ZONE_YAML, SimRobotProcess, dds_domain, register_blind_driving  # noqa: E402
 from tests.helpers import wait_until as wait_for  # noqa: E402
 
 BURGER_RADIUS = 0.105
@@ -28,7 +27,7 @@ def loopback(monkeypatch):
 
 
 async def test_a_stop_zone_halts_a_blind_tree_before_the_wall_over_dds(tmp_path):
-    domain = 100 + (os.getpid() + 7 * 37) % 100  # a domain of its own (the e2e tests use 100..199 too)
+    domain = dds_domain()
     zones_file = tmp_path / "cm.yaml"
     zones_file.write_text(STOP_ZONE_YAML)
     robot = SimRobotProcess(domain, "--robot", "burger", "--spawn=-2,-2,1.5708", duration=60.0)

@@ -11,7 +11,6 @@ emergency stop beats it too. Judged from what reached ``cmd_vel`` and from odome
 
 import asyncio
 import contextlib
-import os
 
 import pytest
 
@@ -21,7 +20,7 @@ from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
 from bt_runtime.runtime.config import GateConfig, RuntimeConfig  # noqa: E402
 from bt_runtime.runtime.messages import Pose2D  # noqa: E402
 from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver, dds, idl  # noqa: E402
-from tests.helpers import SimRobotProcess, wait_until  # noqa: E402
+from tests.helpers import SimRobotProcess, dds_domain, wait_until  # noqa: E402
 from tests.paths import ROOT  # noqa: E402
 
 TURN = 0.6  # rad/s: the joystick turns in place, which navigation never asks for on a straight run
@@ -39,7 +38,7 @@ def twist(linear: float, angular: float) -> idl.Twist:
 async def test_teleop_outranks_navigation_and_loses_to_the_e_stop():
     import nodes
 
-    domain = 100 + (os.getpid() * 11 + 29) % 100  # its own DDS domain (other test runs: other pids)
+    domain = dds_domain()
     robot = SimRobotProcess(domain, "--robot", "burger", duration=90)
     node = None
     joystick_task = None
