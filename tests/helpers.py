@@ -155,3 +155,25 @@ def register_blind_driving(factory) -> None:
 
     nodes.register_all(factory)
     factory.register_node_type(DriveBlindly)
+
+
+# --- docs/ros2.md's first block: sim-robot, then run on it (test_documented_command.py runs it) ---
+
+DOCUMENTED_ROBOT = "python -m bt_runtime sim-robot --loopback &"  # the block's first line
+
+
+def documented_ros2_commands() -> tuple[list[str], list[str]]:
+    """The two commands of docs/ros2.md's block that starts with ``DOCUMENTED_ROBOT``, as argument
+    lists with this interpreter for ``python``; AssertionError if the block is anything else."""
+    import shlex
+    import sys
+
+    from tests.paths import ROOT
+
+    text = (ROOT / "docs" / "ros2.md").read_text(encoding="utf-8")
+    start = text.index("```bash\n" + DOCUMENTED_ROBOT + "\n")
+    block = text[start:text.index("```\n", start + 8)].splitlines()[1:]
+    assert len(block) == 2 and block[0] == DOCUMENTED_ROBOT, block
+    robot, run = shlex.split(block[0].removesuffix("&")), shlex.split(block[1])
+    assert robot[0] == run[0] == "python" and run[1:5] == ["-m", "bt_runtime", "run", "trees/autonomy.xml"], block
+    return [sys.executable, *robot[1:]], [sys.executable, *run[1:]]

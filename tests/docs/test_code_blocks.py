@@ -130,8 +130,21 @@ def _check_yaml(block: Block) -> None:
         RuntimeConfig.model_validate(data)
 
 
+def _run_by_a_test_of_its_own(block: Block) -> bool:
+    """docs/ros2.md's sim-robot + run pair: test_documented_command.py runs those two commands,
+    read from the block, and checks the goal's outcome too (one run of a 30 s DDS drive, not two)."""
+    from tests.helpers import DOCUMENTED_ROBOT
+
+    return block.file == "docs/ros2.md" and block.code.startswith(DOCUMENTED_ROBOT + "\n")
+
+
 @pytest.mark.parametrize("block", [b for b in BLOCKS if b.skip is None], ids=lambda b: b.id)
 def test_code_block_runs_as_written(block, tmp_path):
+    if _run_by_a_test_of_its_own(block):
+        from tests.helpers import documented_ros2_commands
+
+        documented_ros2_commands()  # the block is still the two commands that test runs
+        return
     if block.lang == "yaml":
         _check_yaml(block)
         return

@@ -22,4 +22,6 @@ def test_bench_drive_runs():
         assert 4.999 <= r["sim_seconds"] < 5.11 and 499 <= r["steps"] <= 511 and r["scans"] in (24, 25, 26)
         assert r["distance_m"] > 0.5 and r["collisions"] == 0
         assert set(r["breakdown_s"]) == {"physics", "lidar", "other_sim", "loop_and_rest"} | parts
-        assert r["rtf"] > 10  # a very loose floor; bench/sim.py prints the real figure
+        # a very loose floor (bench/sim.py prints the real figure), on the drive's CPU time: the
+        # wall-clock factor (r["rtf"]) also counts what other processes of a busy machine took
+        assert r["cpu_rtf"] > 10 and r["rtf"] > 0, (r["cpu_rtf"], r["rtf"])
