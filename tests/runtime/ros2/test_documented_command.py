@@ -36,6 +36,7 @@ def test_sim_robot_then_run_reaches_the_goal(tmp_path):
             robot.wait(10)
         robot.stdout.close()
         robot_log.close()
+    (tmp_path / "run.err").write_text(done.stderr)  # all of it, for a failure's post-mortem (--basetemp)
     assert done.returncode == 0, done.stdout + done.stderr[-3000:]
     data = json.loads(summary.read_text())
     assert data["goals"][0]["outcome"] == "SUCCEEDED", data["goals"]
