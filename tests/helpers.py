@@ -11,8 +11,10 @@ def tree_xml(body: str) -> str:
 IDLE_TREE = tree_xml('<KeepRunningUntilFailure><AlwaysSuccess/></KeepRunningUntilFailure>')
 
 
-# DDS domain ids for the tests: 100..229 (Cyclone DDS takes 0..232; 0 is ROS' default, left to users)
-_FIRST_DOMAIN, _DOMAINS = 100, 130
+# DDS domain ids for the tests: 10..99. Their RTPS ports (7400 + 250 * id + ...) stay below Linux's
+# ephemeral port range (32768..), where another socket could hold one; 0 (ROS' default) and small
+# ids are left to users; 100..229 were computed from the pid before this allocator existed.
+_FIRST_DOMAIN, _DOMAINS = 10, 90
 _held_domains: dict[int, object] = {}
 
 
