@@ -18,7 +18,7 @@ AUTONOMY_NODES = [
     collision.CollisionDetected, collision.InContact, collision.EstimateContactPoint, collision.ReverseOut,
     collision.StopRobot, collision.ReleaseRobot, collision.MarkObstacle, collision.ClearCostmaps,
     battery.BatteryCanReach, battery.BatteryAbove, battery.RefuseGoal,
-    docking.ChargeUntil, docking.GoalStatusIs, docking.OnCharger,
+    docking.ChargeUntil, docking.GoalStatusIs, docking.OnCharger, docking.WhileGoalStatusIs,
     path.RatePathQuality, path.PathReachesGoal, path.PlannerAnswers,
     path.FindAlternativeGoal, path.EscapeInflation,
     goals.GoalPending, goals.SetGoalStatus, goals.RetryGoal,

@@ -29,16 +29,26 @@ def energy_for_path(length_m: float, turn_rad: float, speed: float, turn_rate: f
     return (robot.power(speed, 0.0) * drive_time + robot.power(0.0, turn_rate) * turn_time) / 3600.0
 
 
-def path_turning(points, start_yaw: float) -> float:
-    """Total heading change along a polyline (rad), starting from ``start_yaw``."""
-    total, yaw = 0.0, start_yaw
+def path_turning_parts(points) -> tuple[float | None, float]:
+    """(heading of the first leg, heading change along the rest) of a polyline; (None, 0) if it
+    has no leg. The second part depends on the path alone, so it is computed once per path."""
+    first, rest, prev = None, 0.0, 0.0
     for (x0, y0), (x1, y1) in zip(points[:-1, :2], points[1:, :2]):
         if x0 == x1 and y0 == y1:
             continue
         heading = math.atan2(y1 - y0, x1 - x0)
-        total += abs(wrap_angle(heading - yaw))
-        yaw = heading
-    return total
+        if first is None:
+            first = heading
+        else:
+            rest += abs(wrap_angle(heading - prev))
+        prev = heading
+    return first, rest
+
+
+def path_turning(points, start_yaw: float) -> float:
+    """Total heading change along a polyline (rad), starting from ``start_yaw``."""
+    first, rest = path_turning_parts(points)
+    return 0.0 if first is None else abs(wrap_angle(first - start_yaw)) + rest
 
 
 def return_energy(goal: Pose2D, dock: Pose2D | None, detour_factor: float, speed: float, turn_rate: float,
@@ -75,6 +85,11 @@ class BatteryCanReach(ConditionNode):
     def __init__(self, name, config=None):
         super().__init__(name, config)
         self._model = energy_model(self.context)  # starts learning now, not at the first goal
+        # ChargeUntil ticks this at 100 Hz while the battery reports at 1 Hz and the pose at
+        # 10 Hz: the estimate is recomputed only when one of its inputs is a new object
+        self._inputs: tuple = ()
+        self._required = 0.0
+        self._path: tuple = (None, 0.0, None, 0.0)  # (path, length, first heading, rest of the turning)
 
     def tick(self):
         ctx = self.context
@@ -84,26 +99,41 @@ class BatteryCanReach(ConditionNode):
             return FAILURE  # unknown charge or position: cannot promise anything
         goal: Pose2D = self.get_input("goal")
         path: Path | None = self.get_input("path", None)
-        robot = ctx.robot
+        dock = self.get_input("dock", None)
+        model = self._model
+        inputs = (battery, pose, goal, path, dock, model.readings if model is not None else 0)
+        cached = self._inputs
+        if len(cached) == len(inputs) and all(a is b for a, b in zip(cached, inputs)):
+            required = self._required
+        else:
+            required = self._estimate(battery, pose, goal, path, dock if isinstance(dock, Pose2D) else None)
+            self._inputs, self._required = inputs, required
+        if model is not None:
+            self.set_output("energy_factor", model.factor)
+        self.set_output("required", required)
+        self.set_output("available", float(battery.percentage))
+        return SUCCESS if battery.percentage >= required else FAILURE
+
+    def _estimate(self, battery: BatteryState, pose: Pose2D, goal: Pose2D, path: Path | None,
+                  dock: Pose2D | None) -> float:
+        """Percent needed: the trip and the way back to the dock, learned factor, safety factor, reserve."""
+        robot = self.context.robot
         speed = self.get_input("speed") or min(robot.max_linear, 0.25)
         if path is not None and len(path) >= 2:
-            length, turning = path.length, path_turning(path.points, pose.yaw)
+            if self._path[0] is not path:  # a new plan: its length and turns, once
+                self._path = (path, path.length, *path_turning_parts(path.points))
+            _, length, first, rest = self._path
+            turning = 0.0 if first is None else abs(wrap_angle(first - pose.yaw)) + rest
         else:
             length = pose.distance_to(goal) * self.get_input("detour_factor")
             turning = math.pi
         turn_rate = min(robot.max_angular, 1.0)
         energy = energy_for_path(length, turning, speed, turn_rate, robot)
-        dock = self.get_input("dock", None)
-        energy += return_energy(goal, dock if isinstance(dock, Pose2D) else None, self.get_input("detour_factor"),
-                                speed, turn_rate, robot)
+        energy += return_energy(goal, dock, self.get_input("detour_factor"), speed, turn_rate, robot)
         if self._model is not None:
             energy = self._model.energy(energy)
-            self.set_output("energy_factor", self._model.factor)
         voltage = battery.voltage if battery.voltage > 0 else None
-        required = robot.percent_for(energy, voltage) * self.get_input("safety_factor") + self.get_input("reserve")
-        self.set_output("required", required)
-        self.set_output("available", float(battery.percentage))
-        return SUCCESS if battery.percentage >= required else FAILURE
+        return robot.percent_for(energy, voltage) * self.get_input("safety_factor") + self.get_input("reserve")
 
 
 class BatteryAbove(ConditionNode):

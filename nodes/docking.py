@@ -15,7 +15,7 @@ from bt_runtime import ConditionNode
 from bt_runtime.node import DecoratorNode, NodeConfig
 from bt_runtime.ports import DOUBLE, STRING, input_port
 from bt_runtime.runtime.messages import BatteryState
-from bt_runtime.status import FAILURE, IDLE, RUNNING, SUCCESS, NodeStatus
+from bt_runtime.status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
 from .robot import latest
 
@@ -33,6 +33,26 @@ class GoalStatusIs(ConditionNode):
 
     def tick(self) -> NodeStatus:
         return SUCCESS if self.get_input("status", "") == self.get_input("value", "") else FAILURE
+
+
+class WhileGoalStatusIs(DecoratorNode):
+    """Ticks its child while the goal status is ``value``; SKIPPED otherwise, without ticking it
+    (a child still running is halted first, as BT.CPP's ``_while`` does). A branch that applies
+    to one goal state (charging) then costs one blackboard read on every other tick, and no
+    status changes; unlike a ``_while`` script it also works before any goal status exists."""
+
+    @classmethod
+    def provided_ports(cls):
+        return [input_port("value", STRING, description="the status the child runs in"),
+                input_port("status", STRING, "{goal_status}")]
+
+    def tick(self) -> NodeStatus:
+        if self.get_input("status", "") != self.get_input("value", ""):
+            if self._status is RUNNING:
+                self.halt()
+            return SKIPPED
+        self.set_status(RUNNING)
+        return self.child.execute_tick()
 
 
 class OnCharger(ConditionNode):

@@ -145,3 +145,25 @@ def test_the_dock_can_be_given_as_text():
     ctx.backup.pose(0.0, 0.0, 0.0)
     ctx.backup.battery(11.0, voltage=11.0)
     assert _can_reach(ctx, dock="9.0;0.0;0.0").tick_once() is F  # e.g. run --set dock_pose=9;0;0
+
+
+def test_each_new_reading_pose_or_path_is_taken_into_account_at_the_next_tick():
+    """The estimate is reused only while its inputs are the same messages (ChargeUntil ticks the
+    check at 100 Hz): a new battery reading, pose or path changes the answer at once."""
+    ctx = _context()
+    ctx.backup.pose(0.0, 0.0, 0.0)
+    ctx.backup.battery(50.0, voltage=11.0)
+    tree = _can_reach(ctx, path=Path(0.0, np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])))
+    bb = tree.root_blackboard
+    assert tree.tick_once() is S and tree.tick_once() is S
+    short = bb.get("battery_required")
+    ctx.backup.battery(10.05, voltage=11.0)
+    assert tree.tick_once() is F
+    ctx.backup.battery(50.0, voltage=11.0)
+    bb.set("path", Path(0.0, np.array([[0, 0, 0], [0, 20, 0], [1, 20, 0], [1, 0, 0]], dtype=float)))
+    assert tree.tick_once() is S
+    detour = bb.get("battery_required")
+    assert detour > short + 0.5
+    ctx.backup.pose(0.0, 0.0, -math.pi / 2)  # facing away from the path's first leg: a half turn more
+    tree.tick_once()
+    assert bb.get("battery_required") > detour

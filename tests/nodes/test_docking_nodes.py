@@ -61,3 +61,21 @@ def test_on_charger_holds_while_charging_and_when_full_on_the_charger():
     for status, expected in ((POWER_SUPPLY_CHARGING, S), (POWER_SUPPLY_FULL, S), (POWER_SUPPLY_DISCHARGING, F)):
         reading(ctx, 100.0, status)
         assert tree.tick_exactly_once() is expected, status
+
+
+def test_while_goal_status_is_skips_its_branch_and_halts_it_when_the_status_changes():
+    xml = ('<ReactiveFallback><WhileGoalStatusIs value="CHARGING"><ChargeUntil full="99" timeout="10">'
+           '<AlwaysFailure/></ChargeUntil></WhileGoalStatusIs><AlwaysSuccess/></ReactiveFallback>')
+    tree, ctx = build(xml, register=(register_autonomy_nodes,), bb_init={"goal_status": "ACTIVE"})
+    charge = next(n for n in tree.nodes() if type(n).__name__ == "ChargeUntil")
+    reading(ctx, 20.0, POWER_SUPPLY_CHARGING)
+    assert tree.tick_exactly_once() is S  # not charging: the branch is skipped, the next child runs
+    assert charge.status is NodeStatus.IDLE
+    tree.root_blackboard.set("goal_status", "CHARGING")
+    assert tree.tick_exactly_once() is R and charge.status is R
+    tree.root_blackboard.set("goal_status", "PENDING")  # a new goal preempts the charge
+    assert tree.tick_exactly_once() is S
+    assert charge.status is NodeStatus.IDLE  # halted
+    tree, _ = build('<WhileGoalStatusIs value="CHARGING"><AlwaysSuccess/></WhileGoalStatusIs>',
+                    register=(register_autonomy_nodes,))
+    assert tree.tick_exactly_once() is NodeStatus.SKIPPED  # no goal status at all yet: skipped, no error
