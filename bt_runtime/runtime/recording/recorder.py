@@ -93,6 +93,7 @@ class Recorder:
         self._check_map()
         self._task = asyncio.get_running_loop().create_task(self._periodic(), name="recording")
         if getattr(self.pipeline, "on_loop", False):  # virtual time: the writer's work is done here, between ticks
+            self.pipeline.drain()  # now: the live view advertises every topic before the run starts
             self._drain_task = asyncio.get_running_loop().create_task(self._drain(), name="recording.drain")
         self.attached = True
 

@@ -101,11 +101,14 @@ def test_client_receives_cmd_vel_and_tree_log(tmp_path):
     assert log.event_log and log.event_log[0].current_status in ("IDLE", "RUNNING", "SUCCESS", "FAILURE")
 
 
-def test_every_topic_is_advertised_before_its_first_message():
-    """A live client sees every topic at once (and may subscribe before the first message of each)."""
+@pytest.mark.parametrize("virtual", [False, True], ids=["realtime", "virtual"])
+def test_every_topic_is_advertised_before_its_first_message(virtual):
+    """A live client sees every topic at once (and may subscribe before the first message of each),
+    on a real-time loop (writer thread) and on virtual time (writer work on the loop)."""
     from websockets.sync.client import connect
 
     from bt_runtime.runtime.app import AutonomyRuntime
+    from bt_runtime.runtime.clock import run as run_loop
     from bt_runtime.runtime.recording.cli import Recording
     from sim.driver import SimDriver
     from sim.recording import recording_hooks
@@ -129,7 +132,7 @@ def test_every_topic_is_advertised_before_its_first_message():
             recording.stop()
         return expected, advertised
 
-    expected, advertised = asyncio.run(main())
+    expected, advertised = run_loop(main(), virtual=True) if virtual else asyncio.run(main())
     assert {"/scan", "/odom", "/tf", "/cmd_vel", "/cmd_vel/teleop", "/behavior_tree_log", "/sim/ground_truth",
             "/map"} <= set(expected)
     assert advertised == expected
