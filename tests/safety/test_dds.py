@@ -80,9 +80,12 @@ async def test_sigterm_to_a_driving_ros2_run_ends_at_zero_on_the_wire(domain, tm
     base = DdsBase(domain)
     tree = tmp_path / "tree.xml"
     tree.write_text(tree_xml('<Drive linear="0.15"/>'), encoding="utf-8")
+    # no Nav2 on this bench: without this the run first waits 5 s for lifecycle services nobody serves
+    ros2_config = tmp_path / "ros2.yaml"
+    ros2_config.write_text("lifecycle:\n  bringup:\n    enabled: false\n", encoding="utf-8")
     env = dict(os.environ, PYTHONPATH=str(ROOT), ROS_DOMAIN_ID=str(domain))
     proc = subprocess.Popen([sys.executable, "-m", "bt_runtime", "run", str(tree), "--driver", "ros2",
-                             "--ready-timeout", "0.2", "--no-progress", "--collision-monitor", "off", "--register", "tests.safety.support:register_fault_nodes"],
+                             "--ros2-config", str(ros2_config), "--ready-timeout", "0.2", "--no-progress", "--collision-monitor", "off", "--register", "tests.safety.support:register_fault_nodes"],
                             cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         deadline = time.monotonic() + 30
