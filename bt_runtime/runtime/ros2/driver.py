@@ -295,8 +295,8 @@ class Ros2Driver:
     def send_velocity(self, linear: float, angular: float) -> None:
         """Write the command; a zero repeating the last one written within
         ``zero_repeat_period`` stays off the wire (a standing base needs no 100 Hz stream of
-        zeros; writing them was a third of an idle runtime's CPU), but is still announced on
-        ``cmd_vel_out``: the command in force is zero either way."""
+        zeros; writing them was the largest single cost of an idle runtime's event loop), but
+        is still announced on ``cmd_vel_out``: the command in force is zero either way."""
         if linear == 0.0 and angular == 0.0:
             written = self._zero_written_at
             if written is not None and time.monotonic() - written < self.config.topics.cmd_vel.zero_repeat_period:
