@@ -135,3 +135,31 @@ async def test_a_robot_standing_beside_its_own_mark_drives_away_to_its_goal(runt
     assert status.name == "SUCCESS", rt.tree.root_blackboard.get("code", default=None)
     assert math.hypot(sim.pose.x + 1.0, sim.pose.y + 2.3) < 0.3
     await rt.stop()
+
+
+@pytest.mark.parametrize("source, sensed", [("imu", False), ("motion", True)])
+async def test_a_slow_rosbot_touch_is_sensed_from_imu_and_wheels_not_from_the_spike(runtime, source, sensed):
+    """A ROSbot (no bumper) creeping into a box at 0.06 m/s makes no 6 m/s^2 IMU spike; the
+    IMU against the wheels (nodes/stall.py) still senses the contact, ahead."""
+    rt = await runtime(tree_xml(RECOVER.replace("{src}", source)), robot="rosbot2")
+    sim, gate = rt.driver.sim, rt.gate
+    assert sim.bumper is None
+    await asyncio.sleep(1.0)
+    sim.faults.invisible_obstacle(ahead=0.1, width=0.4, depth=0.2, name="box")
+    for _ in range(400):
+        if sim.events_of("collision"):
+            break
+        gate.set_tree_command(0.06, 0.0)
+        await asyncio.sleep(0.01)
+    for _ in range(100):  # keep pushing a little: a real controller would not stop at once
+        gate.set_tree_command(0.06, 0.0)
+        await asyncio.sleep(0.01)
+    gate.clear_tree_command()
+    await asyncio.sleep(0.5)
+    assert sim.events_of("collision"), "the robot never reached the box"
+    direction = rt.tree.root_blackboard.get("collision_direction", default=None)
+    if sensed:
+        assert direction is not None and abs(direction) < 0.7  # ahead
+    else:
+        assert direction is None
+    await rt.stop()
