@@ -197,7 +197,7 @@ def main() -> None:
             from bt_runtime.runtime.ros2 import dds
 
             os.environ.setdefault("CYCLONEDDS_URI", dds.loopback_config())
-            robot = RobotProcess(domain=150 + os.getpid() % 50)
+            robot = RobotProcess(domain=230 + os.getpid() % 3)  # apart from the tests' 10..229
         try:
             for drive in (False,) if args.idle_only else (False, True):
                 print(f"\n{HEADINGS[shape]}\n{'driving' if drive else 'idle tree, robot standing'}, "
