@@ -58,7 +58,12 @@ class LocalBackend:
 
     def _pool(self, runs: list[RunSpec]) -> Iterator[Outcome]:
         self._unfinished = {spec.key: spec for spec in runs}
-        ctx = multiprocessing.get_context("fork" if sys.platform.startswith("linux") else "spawn")
+        fork = sys.platform.startswith("linux")
+        ctx = multiprocessing.get_context("fork" if fork else "spawn")
+        if fork:
+            from .warm import warm_caches
+
+            warm_caches(runs)  # the workers inherit the filled caches
         with ProcessPoolExecutor(max_workers=self.cpus, mp_context=ctx) as pool:
             futures = {pool.submit(execute_run, spec): spec for spec in runs}
             for future in as_completed(futures):
