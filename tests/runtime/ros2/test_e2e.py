@@ -119,6 +119,8 @@ async def test_lidar_2_crash_while_navigating_restart_and_reach_goal(domain):
                                               lambda s, now: truth.extend((now, m.pose.position.x, m.pose.position.y)
                                                                           for m in s))
             driver.subscribe("odom", lambda m: speeds.append(m.twist.linear))
+            scans: list[float] = []  # when the runtime received each scan (the watchdog's input)
+            driver.subscribe("scan", lambda _m: scans.append(runtime.clock()))
             fault = driver.node.publisher("sim/fault", idl.String)
             await wait_for(lambda: all(runtime.supervisor.is_healthy(c) for c in ("lidar", "odom", "localization")),
                            10, "sensors healthy")
@@ -136,7 +138,10 @@ async def test_lidar_2_crash_while_navigating_restart_and_reach_goal(domain):
     reports = [(t, h) for t, h in runtime.context.extras.get("lidar_reports", []) if t >= crash_time]
     failed = [e.t for e in events if e.state is Health.FAILED] + [t for t, h in reports if h is Health.FAILED]
     assert failed, f"lidar failure not detected: {events} {reports[:3]}"
-    assert min(failed) - crash_time < 1.5  # the paper's 1 s watchdog (+ one 10 Hz scan period)
+    # the paper's 1 s watchdog, from the last scan the runtime got (when the robot process acts
+    # on the fault and stops its lidar is the robot's business, and late on a busy machine)
+    last_scan = max(t for t in scans if t < min(failed))
+    assert min(failed) - last_scan < 1.5, (min(failed) - last_scan, min(failed) - crash_time)
     states = [e.state for e in events]
     assert Health.RESTARTING in states and states[-1] is Health.OK, states
     assert all(e.t >= min(failed) for e in events)
@@ -335,6 +340,8 @@ async def test_lidar_2_with_the_project_autonomy_tree(domain):
         try:
             driver.node.subscription("sim/ground_truth", idl.PoseStamped, dds.DEFAULT,
                                      lambda s, now: truth.extend((now, m.pose.position.x, m.pose.position.y) for m in s))
+            scans: list[float] = []  # when the runtime received each scan (the watchdog's input)
+            driver.subscribe("scan", lambda _m: scans.append(runtime.clock()))
             fault = driver.node.publisher("sim/fault", idl.String)
             names = [c.name for c in driver.components()]
             await wait_for(lambda: runtime.supervisor.all_healthy(names), 25, f"all of {names} healthy")
@@ -352,7 +359,9 @@ async def test_lidar_2_with_the_project_autonomy_tree(domain):
     events = [e for e in runtime.supervisor.events_of("lidar") if e.t >= crash_time]
     failed = [e.t for e in events if e.state is Health.FAILED] + [t for t, n in reported if n == "lidar"
                                                                   and t >= crash_time]
-    assert failed and min(failed) - crash_time < 1.5, (events, reported[:3])
+    assert failed, (events, reported[:3])
+    last_scan = max(t for t in scans if t < min(failed))  # the 1 s watchdog, as in the test above
+    assert min(failed) - last_scan < 1.5, (min(failed) - last_scan, min(failed) - crash_time, events)
     states = [e.state for e in events]
     assert Health.RESTARTING in states and states[-1] is Health.OK, events
     assert status == "SUCCEEDED"
