@@ -77,11 +77,8 @@ class _ScriptHolder:
     def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
         """The script's own tick for literal code (``tick()`` while the node is being built,
         or when the code comes from the blackboard)."""
-        try:
-            script = self._script
-        except AttributeError:  # TreeNode.__init__ runs before the script is compiled
-            return type(self).tick
-        if self._code_from_blackboard or script is None:
+        script = self._script  # None while TreeNode.__init__ runs (before the script is compiled)
+        if script is None or self._code_from_blackboard:
             return type(self).tick
         return self._script_tick(script)
 
@@ -111,6 +108,7 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
         return [input_port("code", str, description="Piece of code that can be parsed")]
 
     def __init__(self, name: str, config: NodeConfig):
+        self._script = None  # see _bare_tick
         super().__init__(name, config)
         self._init_script()
         self._use_script_tick()
@@ -137,6 +135,7 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
                            description="Piece of code that can be parsed. Must return false or true")]
 
     def __init__(self, name: str, config: NodeConfig):
+        self._script = None  # see _bare_tick
         super().__init__(name, config)
         self._init_script()
         self._use_script_tick()

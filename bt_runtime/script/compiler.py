@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import operator
 import re
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import Any
 
 from ..errors import BTRuntimeError
@@ -310,6 +310,11 @@ def compile_node(node: Node, names: dict[str, str] | None = None) -> Fn:
     return _emit(_fold_all(node), names or {})
 
 
+def _general_assign(op: str, key: str, value: Node, names: dict[str, str]) -> Fn:
+    """The general closure of ``key op value`` (a shortcut makes it only if it needs it)."""
+    return make_assign(op, key, _emit(value, names))
+
+
 def _emit(node: Node, names: dict[str, str]) -> Fn:
     """``compile_node`` of a node already through ``_fold_all``."""
     if isinstance(node, Literal):
@@ -339,12 +344,8 @@ def _emit(node: Node, names: dict[str, str]) -> Fn:
     if isinstance(node, Assign):
         if isinstance(node.target, Name):
             key = names.get(node.target.name, node.target.name)
-            value = node.value
-
-            def build_general() -> Fn:  # made only if needed: most statements never need it
-                return make_assign(node.op, key, _emit(value, names))
-
-            return shortcut_assign(node.op, key, value, names, build_general) or build_general()
+            return (shortcut_assign(node.op, key, node.value, names, _general_assign)
+                    or _general_assign(node.op, key, node.value, names))
         return make_bad_assign(node.op)
     raise TypeError(f"unknown AST node {node!r}")
 
@@ -396,6 +397,32 @@ def _parse_via_template(text: str) -> tuple[list[Node], dict[str, str]] | None:
 
 # --- public object --------------------------------------------------------------------------
 
+def _run_action(fn: Fn, text: str, node: Any) -> Any:
+    """The general tick of a Script node (``Script.action_tick``)."""
+    cfg = node.config
+    try:
+        fn(cfg.blackboard, cfg.enums)
+    except CastError:
+        raise
+    except BTRuntimeError as exc:
+        raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
+    return SUCCESS
+
+
+def _run_condition(fn: Fn, text: str, node: Any) -> Any:
+    """The general tick of a ScriptCondition node (``Script.condition_tick``)."""
+    cfg = node.config
+    try:
+        value = fn(cfg.blackboard, cfg.enums)
+    except CastError:
+        raise
+    except BTRuntimeError as exc:
+        raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
+    if type(value) is float and value >= 0.0:
+        return SUCCESS if value != 0.0 else FAILURE
+    return SUCCESS if to_bool(value) else FAILURE
+
+
 class Script:
     """A compiled script. ``run`` returns the last expression's value (int, float, str, EMPTY)."""
 
@@ -409,22 +436,11 @@ class Script:
     def action_tick(self) -> Any:
         """``f(node) -> SUCCESS`` that runs the script on the node's blackboard, errors reported
         as ``run`` reports them: the whole tick of a Script node in one call (shared by every
-        node with this text)."""
+        node with this text; node_ticks.py makes a one-frame one for the commonest statements)."""
         tick = self._action_tick
         if tick is None:
-            fn, text = self._fn, self.text
-
-            def script_tick(node):
-                cfg = node.config
-                try:
-                    fn(cfg.blackboard, cfg.enums)
-                except CastError:
-                    raise
-                except BTRuntimeError as exc:
-                    raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
-                return SUCCESS
-
-            tick = self._action_tick = script_node_tick(fn, script_tick) or script_tick
+            general = partial(_run_action, self._fn, self.text)
+            tick = self._action_tick = script_node_tick(self._fn, general) or general
         return tick
 
     def condition_tick(self) -> Any:
@@ -432,21 +448,8 @@ class Script:
         tick of a ScriptCondition node in one call."""
         tick = self._condition_tick
         if tick is None:
-            fn, text = self._fn, self.text
-
-            def script_condition_tick(node):
-                cfg = node.config
-                try:
-                    value = fn(cfg.blackboard, cfg.enums)
-                except CastError:
-                    raise
-                except BTRuntimeError as exc:
-                    raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
-                if type(value) is float and value >= 0.0:
-                    return SUCCESS if value != 0.0 else FAILURE
-                return SUCCESS if to_bool(value) else FAILURE
-
-            tick = self._condition_tick = condition_node_tick(fn, script_condition_tick) or script_condition_tick
+            general = partial(_run_condition, self._fn, self.text)
+            tick = self._condition_tick = condition_node_tick(self._fn, general) or general
         return tick
 
     def run(self, blackboard, enums: dict[str, int] | None = None) -> Any:
