@@ -1,7 +1,8 @@
 """Share of a campaign run spent setting it up: world and simulator, runtime, tree load, start.
 
-Runs scenarios the way a campaign worker does (one process, runs back to back, so per-process
-caches are warm after the first) and splits each run's CPU time (time.process_time) into:
+Runs scenarios the way a campaign worker does (one process, runs back to back; the caches a
+forked worker inherits from the pool's parent are filled first, as sim/scenarios/warm.py does,
+unless --cold) and splits each run's CPU time (time.process_time) into:
 
   driver      building the simulated robot: world file (cached per process), map, physics,
               sensors, the Nav2 stand-in
@@ -28,7 +29,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bt_runtime.logging_setup import quiet_logging  # noqa: E402
 from bt_runtime.runtime.app import AutonomyRuntime  # noqa: E402
 from sim.scenarios import runner  # noqa: E402
+from sim.scenarios.runspec import plan_runs  # noqa: E402
 from sim.scenarios.spec import load_scenario, scenario_names  # noqa: E402
+from sim.scenarios.warm import warm_caches  # noqa: E402
 
 PHASES = ("driver", "runtime", "tree", "start", "judge")
 _spent: dict[str, float] = {}
@@ -68,10 +71,15 @@ def main() -> None:
     parser.add_argument("--only", default="Collision_1,Lidar_2,NoPathFound_1,Battery_1")
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--modes", default="with,without")
+    parser.add_argument("--cold", action="store_true", help="no warm-up: the first run fills the caches")
     args = parser.parse_args()
     quiet_logging("error")
     instrument()
     names = args.only.split(",") if args.only else scenario_names()
+    if not args.cold:
+        specs = [load_scenario(name) for name in names]
+        warm_caches(plan_runs(specs, 1, 0, args.modes.split(",")))
+        _spent.clear()
     print(f"{'run':<34}{'CPU s':>8}" + "".join(f"{p:>9}" for p in PHASES) + f"{'setup %':>9}")
     shares = []
     for name in names:
@@ -89,7 +97,8 @@ def main() -> None:
                       + f"{100 * setup / total:>8.1f}%")
     print(f"\nsetup share of a run: median {100 * statistics.median(shares):.1f} %, "
           f"range {100 * min(shares):.1f}-{100 * max(shares):.1f} % over {len(shares)} runs "
-          "(the first run of the process pays the world parse and imports)")
+          + ("(the first run of the process pays the world parse and imports)" if args.cold
+             else "(caches filled before the first run, as a forked pool worker inherits them)"))
 
 
 if __name__ == "__main__":

@@ -66,6 +66,13 @@ def _register(factory) -> None:
     nodes.register_all(factory)
 
 
+def runtime_config(mode: str) -> RuntimeConfig:
+    """``with``: the full layer; ``without``: the gate in pass-through, the tree ticked per goal."""
+    if mode == "with":
+        return RuntimeConfig()
+    return RuntimeConfig(gate=GateConfig(passthrough=True), tick=TickConfig(stop_on_completion=True))
+
+
 class ScenarioRun:
     """The state of one run (on the running loop)."""
 
@@ -126,11 +133,7 @@ class ScenarioRun:
         wall0 = time.perf_counter()
         driver = self._build_driver()
         driver.navigation = RecordingNavigation(driver.navigation, loop.time)
-        if self.mode == "with":
-            config = RuntimeConfig()
-        else:
-            config = RuntimeConfig(gate=GateConfig(passthrough=True), tick=TickConfig(stop_on_completion=True))
-        rt = AutonomyRuntime(driver, config, register=[_register])
+        rt = AutonomyRuntime(driver, runtime_config(self.mode), register=[_register])
         rt.load_tree(TREES[self.mode])
         bb = rt.tree.root_blackboard
         if self.mode == "with":

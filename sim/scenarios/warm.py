@@ -12,6 +12,8 @@ from collections.abc import Sequence
 
 import structlog
 
+from bt_runtime.runtime.clock import run as run_loop
+
 from .runspec import RunSpec
 
 log = structlog.get_logger("sim.scenarios")
@@ -19,14 +21,32 @@ log = structlog.get_logger("sim.scenarios")
 MAX_SETUPS = 24  # distinct (world, robot, map obstacles) set-ups built; each costs ~10-40 ms
 
 
+async def _runtime_and_tree(run: RunSpec) -> None:
+    """A run's runtime and tree, built and dropped (never started)."""
+    from bt_runtime.runtime.app import AutonomyRuntime
+
+    from .runner import TREES, ScenarioRun, _register, runtime_config
+
+    driver = ScenarioRun(run.scenario, run.mode, run.seed)._build_driver()
+    AutonomyRuntime(driver, runtime_config(run.mode), register=[_register]).load_tree(TREES[run.mode])
+
+
 def warm_caches(runs: Sequence[RunSpec]) -> int:
-    """Build each distinct set-up of the planned runs once (a simulated robot and its Nav2
-    stand-in, not run); returns how many were built. A set-up that fails is left to its run,
+    """Build a runtime and tree per mode, and each distinct set-up of the planned runs once (a
+    simulated robot and its Nav2 stand-in; nothing is run); returns how many were built. A set-up that fails is left to its run,
     which reports the error as its own."""
     import nodes  # noqa: F401  (the node library: every worker's first run imported it)
 
     from .runner import ScenarioRun
 
+    modes = {run.mode for run in runs}
+    for run in runs:  # one runtime and tree per mode: the first run's lazy imports and parses
+        if run.mode in modes:
+            modes.discard(run.mode)
+            try:
+                run_loop(_runtime_and_tree(run), virtual=True)
+            except Exception as exc:  # noqa: BLE001 - the run itself reports it
+                log.debug("warm_up_skipped", scenario=run.scenario.name, error=repr(exc))
     seen: set[str] = set()
     for run in runs:
         spec = run.scenario
