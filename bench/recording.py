@@ -14,14 +14,15 @@ drift affects them alike:
 Prints per configuration the median CPU (user+sys of the process) and wall time over rounds,
 the CPU ratio to the baseline of the same round (median, min-max) and the ratio of the minima
 (the run is deterministic, so the least CPU a configuration took is its cost with the least
-interference from other processes), the writer thread's own CPU, the messages written and
+interference from other processes), the writer's own CPU (its thread in real time; on virtual
+time, as these runs are, the drains the recorder makes on the loop), the messages written and
 dropped, and the load average before and after. A second part runs --realtime pairs (baseline,
 record) and prints the tick lateness p50/p99 of each, to show recording does not delay ticks.
 A third part (--inprocess) measures the run phase alone, in one process: CPU (all threads)
 from the recording's start to its stop, baseline, record, live view without a client and live
 view with a client (a Foxglove WebSocket client in another process, subscribed to every
-channel before the run starts), so start-up (imports) is left out: the steady-state cost per
-robot second.
+channel before the run starts; it gets the high-rate streams at the viewing rate,
+``live_rate_hz``), so start-up (imports) is left out: the steady-state cost per robot second.
 
 Run: python bench/recording.py [--duration 40] [--rounds 3] [--realtime-seconds 15] [--inprocess]
 """
