@@ -214,3 +214,10 @@ def test_btcpp_loads_a_file_with_our_models(tmp_path: Path) -> None:
     assert tree.tick_once() == bt.NodeStatus.SUCCESS
     ours = make_factory().create_tree_from_file(path)
     assert ours.tick_once() == S.FAILURE  # our C is a condition that fails
+
+
+@pytest.mark.parametrize("tree", sorted((ROOT / "trees").glob("*.xml")), ids=lambda p: p.name)
+def test_every_shipped_tree_carries_current_models(tree):
+    """Groot2 shows a shipped tree's nodes from its embedded TreeNodesModel: a port added to a
+    node (e.g. BatteryCanReach's dock) must reach the model, or Groot2 drops it on save."""
+    assert cli.main(["--embed", str(tree), "--check"]) == 0, f"run: python -m bt_runtime models --embed trees/{tree.name}"
