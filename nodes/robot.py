@@ -9,6 +9,7 @@ node that decides from a stale pose decides from where the robot was, not where 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from bt_runtime.errors import LogicError
@@ -38,7 +39,9 @@ def latest(node: Any, stream: str) -> Any:
 
 
 def robot_pose(node: Any, max_age: float = POSE_TIMEOUT) -> Pose2D | None:
-    """The robot's map-frame pose, or None when localization is missing or older than ``max_age`` s."""
+    """The robot's map-frame pose, or None when localization is missing, older than ``max_age``
+    s, or not finite (a NaN pose is no position: every check that used it would pass or fail
+    at random)."""
     ctx = node.context
     backup = getattr(ctx, "backup", None) if ctx is not None else None
     if backup is None:
@@ -49,4 +52,7 @@ def robot_pose(node: Any, max_age: float = POSE_TIMEOUT) -> Pose2D | None:
     age = backup.age("pose") if hasattr(backup, "age") else None
     if age is not None and age > max_age:
         return None
-    return msg.pose if isinstance(msg, LocalizedPose) else getattr(msg, "pose", msg)
+    pose = msg.pose if isinstance(msg, LocalizedPose) else getattr(msg, "pose", msg)
+    if not (math.isfinite(pose.x) and math.isfinite(pose.y) and math.isfinite(pose.yaw)):
+        return None
+    return pose

@@ -416,6 +416,8 @@ class GridPlanner:
         if len(pts) == 0:
             return False
         pts = pts[start_index:]
+        if not np.isfinite(pts[:, :2]).all():  # a non-finite pose is nowhere on the map
+            return False
         cm = self.costmap
         r = np.floor((pts[:, 1] - cm.origin_y) / cm.resolution).astype(np.intp)
         c = np.floor((pts[:, 0] - cm.origin_x) / cm.resolution).astype(np.intp)
@@ -430,10 +432,13 @@ class GridPlanner:
         return not bool(bad.any())
 
     def path_clearance(self, points: np.ndarray) -> float:
-        """Smallest distance (m) from any path pose to a lethal cell (cell-centre distances)."""
+        """Smallest distance (m) from any path pose to a lethal cell (cell-centre distances);
+        0 for a path with a non-finite pose (its clearance is unknown, so it is not safe)."""
         pts = np.asarray(points, dtype=float)
         if len(pts) == 0:
             return math.inf
+        if not np.isfinite(pts[:, :2]).all():
+            return 0.0
         cm = self.costmap
         dist = cm.distance_field()
         r = np.floor((pts[:, 1] - cm.origin_y) / cm.resolution).astype(np.intp)

@@ -31,6 +31,14 @@ def test_fresh_pose_is_read_and_a_stale_one_counts_as_missing():
     assert robot_pose(_node(ctx), max_age=5.0) is not None  # a caller may accept older poses
 
 
+@pytest.mark.parametrize("bad", [(float("nan"), 0.0, 0.0), (1.0, float("inf"), 0.0), (1.0, 2.0, float("nan"))])
+def test_a_non_finite_pose_is_no_pose(bad):
+    """Localization publishing NaN (a NaN fault, a diverged filter) gives no position to decide from."""
+    ctx = fake_context()
+    ctx.backup.pose(*bad)
+    assert robot_pose(_node(ctx)) is None
+
+
 def test_no_context_or_no_backup_is_no_pose():
     assert robot_pose(_node(None)) is None
     assert robot_pose(_node(SimpleNamespace())) is None

@@ -192,3 +192,15 @@ def test_path_validity_and_clearance():
     assert pl.is_path_valid(res.points, start_index=len(res.points) - 5)
     assert pl.path_clearance(res.points) == pytest.approx(0.0, abs=0.051)
     assert not pl.is_path_valid(np.array([[100.0, 100.0]]))
+
+
+def test_a_path_with_a_non_finite_pose_is_invalid_and_has_no_clearance():
+    """A NaN pose (from a NaN localization) is nowhere: never a valid path, never a safe one."""
+    pl = make()
+    res = pl.plan(Pose2D(1.0, 1.0), Pose2D(7.0, 5.0))
+    assert pl.path_clearance(res.points) > 0.0
+    bad = res.points.copy()
+    bad[len(bad) // 2, 0] = np.nan
+    assert not pl.is_path_valid(bad)
+    assert pl.path_clearance(bad) == 0.0
+    assert pl.path_clearance(np.array([[np.inf, 1.0, 0.0]])) == 0.0
