@@ -203,6 +203,29 @@ class ObservedCell(NodeCell):
     status = property(_raw_get_status, _observed_set_status)  # type: ignore[assignment]
 
 
+def _failure_observed_set_status(cell: NodeCell, new: NodeStatus) -> None:
+    prev = _raw_get_status(cell)
+    if prev is not new:
+        _raw_set_status(cell, new)
+        if new is FAILURE:
+            cell.node._notify(prev, new)
+
+
+class FailureObservedCell(NodeCell):
+    """The cell of a node whose subscribers all want FAILURE only (e.g. the run summary's
+    failure witness): the reactive nodes' many other changes per tick notify nobody."""
+
+    __slots__ = ()
+    status = property(_raw_get_status, _failure_observed_set_status)  # type: ignore[assignment]
+
+
+def _failures_only(callback: StatusCallback) -> StatusCallback:
+    def on_failure(stamp: float, node: TreeNode, prev: NodeStatus, new: NodeStatus) -> None:
+        if new is FAILURE:
+            callback(stamp, node, prev, new)
+    return on_failure
+
+
 class TreeNodeManifest:
     """What the factory knows about a registered node type (ports, type, description)."""
 
@@ -240,6 +263,7 @@ class TreeNode:
     _bare_tick_ok: ClassVar[bool] = True
     # Rarely set: class-level defaults, an instance attribute once set (fewer stores per node).
     _subscribers: list[StatusCallback] | tuple[()] = ()  # a list once someone subscribes
+    _wants_all: int = 0  # subscribers that want every change (the others: FAILURE only)
     _pre_hook: PreTickHook | None = None
     _post_hook: PostTickHook | None = None
     _monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
@@ -340,18 +364,25 @@ class TreeNode:
         for callback in tuple(self._subscribers):
             callback(stamp, self, prev, new)
 
-    def subscribe_to_status_change(self, callback: StatusCallback) -> Callable[[], None]:
-        """Call ``callback(timestamp, node, previous, new)`` synchronously on every change."""
+    def subscribe_to_status_change(self, callback: StatusCallback,
+                                   failures_only: bool = False) -> Callable[[], None]:
+        """Call ``callback(timestamp, node, previous, new)`` synchronously on every change, or
+        with ``failures_only`` on every change to FAILURE (the others then cost nothing while
+        no subscriber wants them)."""
         if not isinstance(self._subscribers, list):
             self._subscribers = list(self._subscribers)
-        self._subscribers.append(callback)
-        self._cell.__class__ = ObservedCell
+            self._wants_all = 0
+        entry = _failures_only(callback) if failures_only else callback
+        self._subscribers.append(entry)
+        self._wants_all += not failures_only
+        self._cell.__class__ = ObservedCell if self._wants_all else FailureObservedCell
 
         def unsubscribe() -> None:
-            if callback in self._subscribers:
-                self._subscribers.remove(callback)
-                if not self._subscribers:
-                    self._cell.__class__ = NodeCell
+            if entry in self._subscribers:
+                self._subscribers.remove(entry)
+                self._wants_all -= not failures_only
+                self._cell.__class__ = (ObservedCell if self._wants_all else
+                                        FailureObservedCell if self._subscribers else NodeCell)
 
         return unsubscribe
 

@@ -124,9 +124,11 @@ class Tree:
                 node.config.clock = clock
 
     # -- observers -----------------------------------------------------------------------------
-    def add_status_observer(self, callback: StatusCallback) -> Callable[[], None]:
-        """Call ``callback(timestamp, node, previous, new)`` on every status change of every node."""
-        unsubs = [node.subscribe_to_status_change(callback) for rec in self.subtrees for node in rec.nodes]
+    def add_status_observer(self, callback: StatusCallback, failures_only: bool = False) -> Callable[[], None]:
+        """Call ``callback(timestamp, node, previous, new)`` on every status change of every node
+        (with ``failures_only``: on every change to FAILURE)."""
+        unsubs = [node.subscribe_to_status_change(callback, failures_only)
+                  for rec in self.subtrees for node in rec.nodes]
         entry = (callback, unsubs)
         self._observers.append(entry)
 

@@ -116,7 +116,7 @@ class FailureWitness:
     def attach(cls, runtime: Any) -> FailureWitness:
         """Watch ``runtime`` (its tree must be loaded; call before ``runtime.start()``)."""
         self = cls(runtime)
-        runtime.tree.add_status_observer(self._on_status)
+        runtime.tree.add_status_observer(self._on_status, failures_only=True)  # all it reads
         driver = runtime.driver
         if getattr(driver, "navigation", None) is not None:
             self._nav = WatchedNavigation(driver.navigation, runtime.clock, self.nav_errors)
