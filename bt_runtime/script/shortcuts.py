@@ -72,7 +72,9 @@ def shortcut_assign(op: str, key: str, value: Node, names: dict[str, str],
         if type(constant) is float or type(constant) is str:
             return _assign_same_kind(key, constant, general)
         if type(constant) is int and -MAX_EXACT <= constant <= MAX_EXACT:
-            return _assign_int_to_double(key, constant, general)
+            # ``x := 1`` into a double entry stores 1.0 (BT.CPP converts into the stored kind);
+            # into any other kind of entry the general path decides
+            return _assign_same_kind(key, float(constant), general)
         return None
     if isinstance(value, Name):
         return _copy(key, names.get(value.name, value.name), general)
@@ -131,22 +133,6 @@ def _assign_same_kind(key: str, constant: float | str, general: Fn) -> Fn:
         return general(bb, enums)
     assign_constant.shape = ("constant", key, kind, constant)  # type: ignore[attr-defined]
     return assign_constant
-
-
-def _assign_int_to_double(key: str, constant: int, general: Fn) -> Fn:
-    """``x := 1`` into a double entry stores 1.0 (BT.CPP converts into the stored kind)."""
-    number = float(constant)
-
-    def assign_int_constant(bb, enums):
-        entry = bb._resolved.get(key) or bb.get_entry(key)
-        if entry is not None and type(entry.value) is float:
-            entry.value = number
-            entry.sequence_id += 1
-            entry.stamp = _monotonic_ns()
-            return number
-        return general(bb, enums)
-    assign_int_constant.shape = ("constant", key, float, number)  # type: ignore[attr-defined]
-    return assign_int_constant
 
 
 def _copy(key: str, source: str, general: Fn) -> Fn:

@@ -89,7 +89,9 @@ def test_the_shortcuts_are_what_runs() -> None:
     forget_compiled()
     assert compile_script("x := y + 1")._fn.__name__ == "assign_plus"
     assert compile_script("x += 1")._fn.__name__ == "add_constant"
-    assert compile_script("x := 1")._fn.__name__ == "assign_int_constant"
+    int_into_double = compile_script("x := 1")._fn  # the constant shortcut, with 1 stored as 1.0
+    assert int_into_double.__name__ == "assign_constant"
+    assert int_into_double.shape == ("constant", "x", float, 1.0)
     assert compile_script("x := y")._fn.__name__ == "copy"
     assert compile_script("!y")._fn.__name__ == "not_name"
 
