@@ -371,7 +371,6 @@ class TreeNode:
         no subscriber wants them)."""
         if not isinstance(self._subscribers, list):
             self._subscribers = list(self._subscribers)
-            self._wants_all = 0
         entry = _failures_only(callback) if failures_only else callback
         self._subscribers.append(entry)
         self._wants_all += not failures_only
