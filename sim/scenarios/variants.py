@@ -327,6 +327,20 @@ def _box_on_path(rng: np.random.Generator, world: str, robot: str, start, goal, 
     return {"x": round(x, 3), "y": round(y, 3), "yaw": round(yaw, 3), "width": 0.3, "depth": 0.3}
 
 
+HITTER = {"ahead": 0.0, "width": 0.3, "depth": 0.3}  # the pushed variants' box, against the body's front
+
+
+def _hitter_box(robot: str, start) -> dict[str, float]:
+    """Where the pushed variant's hitter stays (``invisible_obstacle`` with ``ahead``, placed
+    in front of the standing robot at ``start``), as a box for ``path_with_box``."""
+    from ..robot import load_profile
+
+    near = load_profile(robot).radius + HITTER["ahead"] + HITTER["depth"] / 2
+    x, y, yaw = start
+    return {"x": x + near * math.cos(yaw), "y": y + near * math.sin(yaw), "yaw": yaw,
+            "width": HITTER["width"], "depth": HITTER["depth"]}
+
+
 def collision_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
     world, robot = _choice(rng, WORLDS), _choice(rng, ROBOTS)
     start, goal, length = _trip(rng, world, robot, min_len=2.5)
@@ -335,8 +349,13 @@ def collision_variant(rng: np.random.Generator, index: int) -> ScenarioSpec:
     success: list[dict[str, Any]] = [{"kind": "out_of_contact", "for_last": 2.0},
                                      {"kind": "reach_goal", "goal": 0, "tolerance": 0.25}]
     if how == "pushed":
-        faults.append({"fault": {"kind": "invisible_obstacle", "ahead": 0.0, "width": 0.3, "depth": 0.3,
-                                 "name": "hitter"}, "at": 2.0})
+        for _ in range(30):  # a hitter that leaves the goal reachable (as the boxes on the path)
+            detour = path_with_box(world, robot, start[:2], goal[:2], _hitter_box(robot, start))
+            if detour < math.inf:
+                length = max(length, detour)
+                break
+            start, goal, length = _trip(rng, world, robot, min_len=2.5)
+        faults.append({"fault": {"kind": "invisible_obstacle", **HITTER, "name": "hitter"}, "at": 2.0})
         faults.append({"fault": {"kind": "push", "impulse": float(rng.uniform(0.5, 1.2)),
                                  "direction": 3.1416}, "at": 2.0})
         success.append({"kind": "hit_once", "obstacle": "hitter"})
@@ -522,17 +541,24 @@ def generate(n: int, seed: int = 0, *, families: list[str] | None = None, modes:
     unknown = [f for f in names if f not in FAMILIES]
     if unknown:
         raise ValueError(f"unknown variant families {unknown}; known: {', '.join(FAMILIES)}")
-    weights = np.array([WEIGHTS[f] for f in names])
-    weights /= weights.sum()
     out = []
     for i in range(n):
-        rng = np.random.default_rng([seed, i])
-        family = names[int(rng.choice(len(names), p=weights))]
-        spec = FAMILIES[family](rng, i)
-        run_seed = int(rng.integers(2**31))
+        spec, run_seed = variant(seed, i, names)
         out.extend(RunSpec(spec, mode, i, run_seed, artifacts=dict(artifacts or {}), options=dict(options or {}))
                    for mode in modes)
     return out
+
+
+def variant(seed: int, index: int, families: list[str] | None = None) -> tuple[ScenarioSpec, int]:
+    """Variant ``index`` of the campaign ``seed`` (drawn among ``families``, all by default)
+    and its run seed: what ``generate`` yields at that index, without drawing the others."""
+    names = families or list(FAMILIES)
+    weights = np.array([WEIGHTS[f] for f in names])
+    weights /= weights.sum()
+    rng = np.random.default_rng([seed, index])
+    family = names[int(rng.choice(len(names), p=weights))]
+    spec = FAMILIES[family](rng, index)
+    return spec, int(rng.integers(2**31))
 
 
 def family_of(name: str) -> str:
@@ -540,4 +566,4 @@ def family_of(name: str) -> str:
     return name.split("_", 1)[1] if name.startswith("V") and "_" in name else name
 
 
-__all__ = ["FAMILIES", "family_of", "generate", "path_length"]
+__all__ = ["FAMILIES", "family_of", "generate", "path_length", "variant"]

@@ -10,7 +10,7 @@ import pytest
 from bt_runtime.logging_setup import quiet_logging
 from sim.scenarios.box_check import path_with_box
 from sim.scenarios.runner import run_scenario
-from sim.scenarios.variants import FAMILIES, family_of, generate
+from sim.scenarios.variants import FAMILIES, family_of, generate, variant
 
 
 @pytest.fixture(autouse=True)
@@ -74,3 +74,36 @@ def test_a_box_the_robot_never_touched_needs_no_mark():
     record.sim_events = [type("E", (), {"t": 3.0, "kind": "collision", "data": {"obstacle": "dyn:low_box"}})()]
     assert not obstacle_in_map(record, ObstacleInMap(kind="obstacle_in_map", obstacle="low_box",
                                                      only_if_hit=True)).passed
+
+
+def test_a_pushed_variant_whose_hitter_cuts_the_goal_off_is_not_drawn():
+    """The pushed variants are fairness-checked like the boxes on the path: seed 2028's V0263
+    (a waffle facing west in the 0.9 m corridor, the hitter left between it and the goal) had
+    no way past the hitter; the generator now draws only hitters that leave one, placed where
+    the simulator puts them."""
+    from bt_runtime.runtime.messages import Pose2D
+    from sim.scenarios.variants import HITTER, _hitter_box
+    from sim.simulator import Simulator
+
+    unfair_start, unfair_goal = (0.973, 0.399, -3.109), (-2.84, 1.47)
+    assert path_with_box("apartment", "waffle", unfair_start[:2], unfair_goal,
+                         _hitter_box("waffle", unfair_start)) == math.inf
+    sim = Simulator("apartment", "waffle", seed=0)
+    sim.reset_pose(Pose2D(1.0, -3.0, 0.7))
+    sim.faults.invisible_obstacle(**HITTER, name="hitter")
+    placed = sim.dynamic_obstacles["hitter"].points
+    box = _hitter_box("waffle", (1.0, -3.0, 0.7))
+    centre = [sum(p[0] for p in placed) / 4, sum(p[1] for p in placed) / 4]
+    assert centre == pytest.approx([box["x"], box["y"]], abs=1e-6)
+    redrawn, _ = variant(2028, 263)
+    assert redrawn.name == "V0263_collision" and "pushed" in redrawn.description
+    checked = 0
+    for spec in [redrawn] + [r.scenario for r in generate(30, seed=2028, families=["collision"])]:
+        if "pushed" not in spec.description:
+            continue
+        start, goal = spec.start, spec.goals[0].pose
+        hitter = _hitter_box(spec.robot, (start.x, start.y, start.yaw))
+        assert path_with_box(spec.world, spec.robot, (start.x, start.y), (goal.x, goal.y), hitter) < math.inf, \
+            spec.name
+        checked += 1
+    assert checked >= 4
