@@ -559,6 +559,15 @@ class TreeNode:
                 return default
             raise
 
+    def input_is_constant(self, name: str) -> bool:
+        """Whether input port ``name`` holds a literal (or takes its default) rather than a
+        blackboard pointer: its value can then never change, so a node may read it once."""
+        try:
+            raw, _ = self._raw_input(name)
+        except BehaviorTreeException:
+            return False
+        return not (isinstance(raw, str) and blackboard_key(raw, name) is not None)
+
     def get_input_stamped(self, name: str) -> tuple[Any, int, int]:
         """(value, sequence_id, timestamp_ns) of an input; (value, 0, 0) for a literal."""
         raw, port = self._raw_input(name)

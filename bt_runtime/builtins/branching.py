@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import re
 
-from ..errors import BehaviorTreeException, LogicError
-from ..node import ControlNode, NodeConfig, tick_cell
+from ..errors import BehaviorTreeException, LogicError, NodeExecutionError
+from ..node import ControlNode, NodeConfig, _is_execute_tick, _wrap_error
 from ..ports import input_port, parse_float
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
@@ -29,27 +29,63 @@ class IfThenElseNode(ControlNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        cells = self._cells  # the children's cells: tick_cell(cell) is child.execute_tick()
+        cells = self._cells  # the children's cells
         n = len(cells)
         if n != 2 and n != 3:
             raise LogicError("IfThenElseNode must have either 2 or 3 children")
         self._cell.status = RUNNING  # set_status(RUNNING)
-        if self._child_idx == 0:
-            cond = tick_cell(cells[0])
+        idx = self._child_idx
+        if idx == 0:
+            cell = cells[0]
+            # -- cond = tick_cell(cell) (child.execute_tick()), inlined for speed ----------------
+            fast = cell.fast
+            try:
+                cond = fast(cell.node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                if _is_execute_tick(fast, cell.node):  # execute_tick's own error
+                    raise
+                raise _wrap_error(cell, exc) from exc
+            if cond is not SKIPPED:
+                if cond is IDLE:
+                    cell.node.set_status(cond)  # raises, as BT.CPP's setStatus(IDLE) does
+                cell.status = cond
+            # ---------------------------------------------------------------------------------------
             if cond is RUNNING:
                 return RUNNING
             if cond is SUCCESS:
-                self._child_idx = 1
+                idx = self._child_idx = 1
             elif cond is FAILURE:
                 if n == 3:
-                    self._child_idx = 2
+                    idx = self._child_idx = 2
                 else:
                     return FAILURE
-        if self._child_idx > 0:
-            status = tick_cell(cells[self._child_idx])
+        if idx > 0:
+            cell = cells[idx]
+            # -- status = tick_cell(cell) (child.execute_tick()), inlined for speed ----------------
+            fast = cell.fast
+            try:
+                status = fast(cell.node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                if _is_execute_tick(fast, cell.node):  # execute_tick's own error
+                    raise
+                raise _wrap_error(cell, exc) from exc
+            if status is not SKIPPED:
+                if status is IDLE:
+                    cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+                cell.status = status
+            # ---------------------------------------------------------------------------------------
             if status is RUNNING:
                 return RUNNING
-            self.reset_children()
+            for cell in cells:  # reset_children(), inlined for speed
+                child_status = cell.status
+                if child_status is not IDLE:
+                    if child_status is RUNNING:
+                        cell.node.halt_node()
+                    cell.status = IDLE  # notifies if observed
             self._child_idx = 0
             return status
         raise LogicError("Something unexpected happened in IfThenElseNode")
@@ -63,28 +99,84 @@ class WhileDoElseNode(ControlNode):
     """Reactive if/else: the condition is ticked every tick and switches branches."""
 
     def tick(self) -> NodeStatus:
-        cells = self._cells  # the children's cells: tick_cell(cell) is child.execute_tick()
+        cells = self._cells  # the children's cells
         n = len(cells)
         if n != 2 and n != 3:
             raise LogicError("WhileDoElseNode must have either 2 or 3 children")
         self._cell.status = RUNNING  # set_status(RUNNING)
-        cond = tick_cell(cells[0])
+        cell = cells[0]
+        # -- cond = tick_cell(cell) (child.execute_tick()), inlined for speed ----------------
+        fast = cell.fast
+        try:
+            cond = fast(cell.node)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            if _is_execute_tick(fast, cell.node):  # execute_tick's own error
+                raise
+            raise _wrap_error(cell, exc) from exc
+        if cond is not SKIPPED:
+            if cond is IDLE:
+                cell.node.set_status(cond)  # raises, as BT.CPP's setStatus(IDLE) does
+            cell.status = cond
+        # ---------------------------------------------------------------------------------------
         if cond is RUNNING:
             return RUNNING
         status = IDLE
         if cond is SUCCESS:
             if n == 3:
-                self.halt_child(2)
-            status = tick_cell(cells[1])
+                cell = cells[2]  # halt_child(2), inlined
+                if cell.status is RUNNING:
+                    cell.node.halt_node()
+                cell.status = IDLE
+            cell = cells[1]
+            # -- status = tick_cell(cell) (child.execute_tick()), inlined for speed ----------------
+            fast = cell.fast
+            try:
+                status = fast(cell.node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                if _is_execute_tick(fast, cell.node):  # execute_tick's own error
+                    raise
+                raise _wrap_error(cell, exc) from exc
+            if status is not SKIPPED:
+                if status is IDLE:
+                    cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+                cell.status = status
+            # ---------------------------------------------------------------------------------------
         elif cond is FAILURE:
             if n == 3:
-                self.halt_child(1)
-                status = tick_cell(cells[2])
+                cell = cells[1]  # halt_child(1), inlined
+                if cell.status is RUNNING:
+                    cell.node.halt_node()
+                cell.status = IDLE
+                cell = cells[2]
+                # -- status = tick_cell(cell) (child.execute_tick()), inlined for speed ----------------
+                fast = cell.fast
+                try:
+                    status = fast(cell.node)
+                except NodeExecutionError:
+                    raise
+                except Exception as exc:
+                    if _is_execute_tick(fast, cell.node):  # execute_tick's own error
+                        raise
+                    raise _wrap_error(cell, exc) from exc
+                if status is not SKIPPED:
+                    if status is IDLE:
+                        cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+                    cell.status = status
+                # ---------------------------------------------------------------------------------------
             else:
                 status = FAILURE
         if status is RUNNING:
             return RUNNING
-        self.reset_children()
+        for cell in cells:  # reset_children(), inlined for speed
+            child_status = cell.status
+            if child_status is not IDLE:
+                if child_status is RUNNING:
+                    cell.node.halt_node()
+                cell.status = IDLE  # notifies if observed
         return status
 
 
@@ -124,6 +216,7 @@ class SwitchNode(ControlNode):
     """Tick the child whose ``case_i`` equals ``variable``; the last child is the default."""
 
     num_cases = 2
+    _cases: tuple[str | None, ...] | None = None  # the case values, once known to be literals
 
     @classmethod
     def provided_ports(cls):
@@ -135,6 +228,14 @@ class SwitchNode(ControlNode):
         self._running_child = -1
         super().__init__(name, config)
 
+    def _case_values(self) -> tuple[str | None, ...] | None:
+        """The ``case_i`` values, if every one is a literal (they then never change), else None."""
+        names = [f"case_{i + 1}" for i in range(self.num_cases)]
+        if not all(self.input_is_constant(name) for name in names):
+            return None
+        cases = self._cases = tuple(self.get_input(name, None) for name in names)
+        return cases
+
     def tick(self) -> NodeStatus:
         k = self.num_cases
         cells = self._cells
@@ -144,21 +245,48 @@ class SwitchNode(ControlNode):
         variable = self.get_input("variable", None)
         if variable is not None:
             enums = self.config.enums
-            for i in range(k):
-                value = self.get_input(f"case_{i + 1}", None)
-                if value is not None and switch_case_matches(variable, value, enums):
-                    match = i
-                    break
-        if self._running_child != -1 and self._running_child != match:
-            self.halt_child(self._running_child)
-        status = tick_cell(cells[match])
+            cases = self._cases
+            if cases is None and (cases := self._case_values()) is None:
+                for i in range(k):  # cases taken from the blackboard: read them every tick
+                    value = self.get_input(f"case_{i + 1}", None)
+                    if value is not None and switch_case_matches(variable, value, enums):
+                        match = i
+                        break
+            else:
+                for i, value in enumerate(cases):
+                    if value is not None and (variable == value or switch_case_matches(variable, value, enums)):
+                        match = i
+                        break
+        running = self._running_child
+        if running != -1 and running != match:
+            self.halt_child(running)
+        cell = cells[match]
+        # -- status = tick_cell(cell) (child.execute_tick()), inlined for speed -----------------
+        fast = cell.fast
+        try:
+            status = fast(cell.node)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            if _is_execute_tick(fast, cell.node):  # execute_tick's own error
+                raise
+            raise _wrap_error(cell, exc) from exc
         if status is SKIPPED:
             self._running_child = -1
             return SKIPPED
+        if status is IDLE:
+            cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+        cell.status = status
+        # ----------------------------------------------------------------------------------------
         if status is RUNNING:
             self._running_child = match
         else:
-            self.reset_children()
+            for cell in cells:  # reset_children(), inlined for speed
+                child_status = cell.status
+                if child_status is not IDLE:
+                    if child_status is RUNNING:
+                        cell.node.halt_node()
+                    cell.status = IDLE  # notifies if observed
             self._running_child = -1
         return status
 

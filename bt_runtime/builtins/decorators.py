@@ -48,19 +48,57 @@ class InverterNode(DecoratorNode):
 class ForceSuccessNode(DecoratorNode):
     _bare_tick_ok = True  # tick() resets a completed child itself
 
-    _forced = SUCCESS
-
     def tick(self) -> NodeStatus:
         self._cell.status = RUNNING  # set_status(RUNNING)
-        status = tick_cell(self._child_cell)
+        child = self._child_cell
+        # -- status = tick_cell(child), inlined for speed ------------------------------------
+        fast = child.fast
+        try:
+            status = fast(child.node)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
+                raise
+            raise _wrap_error(child, exc) from exc
+        # -------------------------------------------------------------------------------------
         if status is SUCCESS or status is FAILURE:
-            self.reset_child()
-            return self._forced
+            child.status = status
+            child.status = IDLE  # reset_child(): a completed child is not RUNNING
+            return SUCCESS
+        if status is not SKIPPED:
+            if status is IDLE:
+                child.node.set_status(status)  # raises
+            child.status = status
         return status
 
 
-class ForceFailureNode(ForceSuccessNode):
-    _forced = FAILURE
+class ForceFailureNode(DecoratorNode):
+    _bare_tick_ok = True  # tick() resets a completed child itself
+
+    def tick(self) -> NodeStatus:
+        self._cell.status = RUNNING  # set_status(RUNNING)
+        child = self._child_cell
+        # -- status = tick_cell(child), inlined for speed ------------------------------------
+        fast = child.fast
+        try:
+            status = fast(child.node)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
+                raise
+            raise _wrap_error(child, exc) from exc
+        # -------------------------------------------------------------------------------------
+        if status is SUCCESS or status is FAILURE:
+            child.status = status
+            child.status = IDLE  # reset_child(): a completed child is not RUNNING
+            return FAILURE
+        if status is not SKIPPED:
+            if status is IDLE:
+                child.node.set_status(status)  # raises
+            child.status = status
+        return status
 
 
 class KeepRunningUntilFailureNode(DecoratorNode):
@@ -68,22 +106,57 @@ class KeepRunningUntilFailureNode(DecoratorNode):
 
     def tick(self) -> NodeStatus:
         self._cell.status = RUNNING  # set_status(RUNNING)
-        status = tick_cell(self._child_cell)
+        child = self._child_cell
+        # -- status = tick_cell(child), inlined for speed ------------------------------------
+        fast = child.fast
+        try:
+            status = fast(child.node)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
+                raise
+            raise _wrap_error(child, exc) from exc
+        if status is not SKIPPED:
+            if status is IDLE:
+                child.node.set_status(status)  # raises
+            child.status = status
+        # -------------------------------------------------------------------------------------
         if status is FAILURE:
-            self.reset_child()
+            child.status = IDLE  # reset_child(): a completed child is not RUNNING
             return FAILURE
         if status is SUCCESS:
-            self.reset_child()
+            child.status = IDLE
             return RUNNING
         if status is RUNNING:
             return RUNNING
         return self._cell.status
 
 
-class RepeatNode(DecoratorNode):
-    """Repeat a successful child ``num_cycles`` times (-1: forever)."""
+class _CountingDecorator(DecoratorNode):
+    """Repeat and RetryUntilSuccessful: a decorator with an int port read every tick, unless
+    it is a literal (or its default), which cannot change: then it is read once."""
 
     _bare_tick_ok = True  # tick() resets a completed child itself
+    _limit: int | None = None  # the port's value, once known to be constant
+    _port = ""
+    _missing = ""
+
+    def _read_limit(self) -> int:
+        try:
+            n = self.get_input(self._port)
+        except BTRuntimeError:
+            raise BTRuntimeError(self._missing) from None
+        if self.input_is_constant(self._port):
+            self._limit = n
+        return n
+
+
+class RepeatNode(_CountingDecorator):
+    """Repeat a successful child ``num_cycles`` times (-1: forever)."""
+
+    _port = "num_cycles"
+    _missing = "Missing parameter [num_cycles] in RepeatNode"
 
     @classmethod
     def provided_ports(cls):
@@ -95,33 +168,48 @@ class RepeatNode(DecoratorNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        try:
-            n = self.get_input("num_cycles")
-        except BTRuntimeError:
-            raise BTRuntimeError("Missing parameter [num_cycles] in RepeatNode") from None
+        n = self._limit
+        if n is None:
+            n = self._read_limit()
         loop = self._count < n or n == -1
         self._cell.status = RUNNING  # set_status(RUNNING)
         child = self._child_cell
         while loop:
             prev = child.status
-            status = tick_cell(child)
+            # -- status = tick_cell(child), inlined for speed --------------------------------
+            fast = child.fast
+            try:
+                status = fast(child.node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
+                    raise
+                raise _wrap_error(child, exc) from exc
+            # ---------------------------------------------------------------------------------
             if status is SUCCESS:
+                child.status = status
                 self._count += 1
                 loop = self._count < n or n == -1
-                self.reset_child()
+                child.status = IDLE  # reset_child(): a completed child is not RUNNING
                 if prev is IDLE and loop:
                     self.config.wake_up.emit()
                     return RUNNING
             elif status is FAILURE:
+                child.status = status
                 self._count = 0
-                self.reset_child()
+                child.status = IDLE
                 return FAILURE
             elif status is RUNNING:
+                child.status = status
                 return RUNNING
             elif status is SKIPPED:
                 self.reset_child()
                 return SKIPPED
             else:
+                if status is IDLE:
+                    child.node.set_status(status)  # raises
+                child.status = status
                 raise _idle(self)
         self._count = 0
         return SUCCESS
@@ -131,10 +219,11 @@ class RepeatNode(DecoratorNode):
         DecoratorNode.halt(self)
 
 
-class RetryNode(DecoratorNode):
+class RetryNode(_CountingDecorator):
     """Retry a failing child up to ``num_attempts`` times (-1: forever)."""
 
-    _bare_tick_ok = True  # tick() resets a completed child itself
+    _port = "num_attempts"
+    _missing = "Missing parameter [num_attempts] in RetryNode"
 
     @classmethod
     def provided_ports(cls):
@@ -146,34 +235,50 @@ class RetryNode(DecoratorNode):
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
-        try:
-            n = self.get_input("num_attempts")
-        except BTRuntimeError:
-            raise BTRuntimeError("Missing parameter [num_attempts] in RetryNode") from None
+        n = self._limit
+        if n is None:
+            n = self._read_limit()
         loop = self._tries < n or n == -1
         self._cell.status = RUNNING  # set_status(RUNNING)
         child = self._child_cell
         while loop:
             prev = child.status
-            status = tick_cell(child)
+            # -- status = tick_cell(child), inlined for speed --------------------------------
+            fast = child.fast
+            try:
+                status = fast(child.node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                if _is_execute_tick(fast, child.node):  # not the bare tick: execute_tick's own error
+                    raise
+                raise _wrap_error(child, exc) from exc
+            # ---------------------------------------------------------------------------------
             if status is SUCCESS:
+                child.status = status
                 self._tries = 0
-                self.reset_child()
+                child.status = IDLE  # reset_child(): a completed child is not RUNNING
                 return SUCCESS
             if status is FAILURE:
+                child.status = status
                 self._tries += 1
-                n = self.get_input("num_attempts", n)
+                if self._limit is None:  # a blackboard entry: re-read (BT.CPP re-reads it here)
+                    n = self.get_input("num_attempts", n)
                 loop = self._tries < n or n == -1
-                self.reset_child()
+                child.status = IDLE
                 if prev is IDLE and loop:
                     self.config.wake_up.emit()
                     return RUNNING
             elif status is RUNNING:
+                child.status = status
                 return RUNNING
             elif status is SKIPPED:
                 self.reset_child()
                 return SKIPPED
             else:
+                if status is IDLE:
+                    child.node.set_status(status)  # raises
+                child.status = status
                 raise _idle(self)
         self._tries = 0
         return FAILURE

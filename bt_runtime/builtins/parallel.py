@@ -1,9 +1,14 @@
-"""Parallel (success/failure thresholds, early exit) and ParallelAll (spec 4.2)."""
+"""Parallel (success/failure thresholds, early exit) and ParallelAll (spec 4.2).
+
+Their ports are read every tick, as BT.CPP reads them, unless they are literals (or take their
+defaults), which cannot change: then the thresholds are worked out once per number of children.
+The children are ticked through their cells (``tick_cell`` inlined: one frame per child).
+"""
 
 from __future__ import annotations
 
-from ..errors import BTRuntimeError, LogicError
-from ..node import ControlNode, NodeConfig, tick_cell
+from ..errors import BTRuntimeError, LogicError, NodeExecutionError
+from ..node import ControlNode, NodeConfig, _is_execute_tick, _wrap_error
 from ..ports import input_port
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
@@ -17,6 +22,9 @@ class ParallelNode(ControlNode):
     ``failure_count`` failed (negative values count from the number of children)."""
 
     description = "Tick every child; succeed/fail by thresholds"
+    # (number of children, success_count, effective success, effective failure) once both
+    # ports are known to be constant and the thresholds were checked for that many children
+    _limits: tuple[int, int, int, int] | None = None
 
     @classmethod
     def provided_ports(cls):
@@ -36,7 +44,7 @@ class ParallelNode(ControlNode):
         self._successes = 0
         self._failures = 0
 
-    def tick(self) -> NodeStatus:
+    def _read_limits(self, n: int) -> tuple[int, int, int, int]:
         try:
             s_raw = int(self.get_input("success_count"))
         except BTRuntimeError:
@@ -45,39 +53,74 @@ class ParallelNode(ControlNode):
             f_raw = int(self.get_input("failure_count"))
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [failure_count] in ParallelNode") from None
-        cells = self._cells
-        n = len(cells)
         s_eff = _effective(s_raw, n)
         f_eff = _effective(f_raw, n)
         if n < s_eff:
             raise LogicError("Number of children is less than threshold. Can never succeed.")
         if n < f_eff:
             raise LogicError("Number of children is less than threshold. Can never fail.")
+        limits = (n, s_raw, s_eff, f_eff)
+        if self.input_is_constant("success_count") and self.input_is_constant("failure_count"):
+            self._limits = limits
+        return limits
+
+    def tick(self) -> NodeStatus:
+        cells = self._cells
+        n = len(cells)
+        limits = self._limits
+        if limits is None or limits[0] != n:
+            limits = self._read_limits(n)
+        _, s_raw, s_eff, f_eff = limits
         self._cell.status = RUNNING  # set_status(RUNNING)
         skipped = 0
         completed = self._completed
-        for i, child in enumerate(cells):
+        i = -1
+        for child in cells:
+            i += 1
             if i not in completed:
-                status = tick_cell(child)  # child.execute_tick()
-                if status is SKIPPED:
-                    skipped += 1
-                elif status is SUCCESS:
+                # -- status = tick_cell(child) (child.execute_tick()), inlined for speed ----------
+                fast = child.fast
+                try:
+                    status = fast(child.node)
+                except NodeExecutionError:
+                    raise
+                except Exception as exc:
+                    if _is_execute_tick(fast, child.node):  # execute_tick's own error
+                        raise
+                    raise _wrap_error(child, exc) from exc
+                # ---------------------------------------------------------------------------------
+                if status is SUCCESS:
+                    child.status = status
                     completed.add(i)
                     self._successes += 1
                 elif status is FAILURE:
+                    child.status = status
                     completed.add(i)
                     self._failures += 1
-                elif status is IDLE:
-                    raise LogicError(f"[{self.name}]: A children should not return IDLE")
+                elif status is SKIPPED:
+                    skipped += 1
+                else:
+                    if status is IDLE:
+                        child.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+                    child.status = status
             if self._successes >= s_eff or (s_raw < 0 and self._successes + skipped >= s_eff):
-                self._clear()
-                self.reset_children()
-                return SUCCESS
+                result = SUCCESS
+                break
             if (n - self._failures) < s_eff or self._failures == f_eff:
-                self._clear()
-                self.reset_children()
-                return FAILURE
-        return SKIPPED if skipped == n else RUNNING
+                result = FAILURE
+                break
+        else:
+            return SKIPPED if skipped == n else RUNNING
+        completed.clear()  # _clear(), inlined
+        self._successes = 0
+        self._failures = 0
+        for cell in cells:  # reset_children(), inlined for speed
+            status = cell.status
+            if status is not IDLE:
+                if status is RUNNING:
+                    cell.node.halt_node()
+                cell.status = IDLE  # notifies if observed
+        return result
 
     def halt(self) -> None:
         self._clear()
@@ -88,6 +131,8 @@ class ParallelAllNode(ControlNode):
     """Run every child to completion; FAILURE if at least ``max_failures`` failed."""
 
     description = "Tick every child until all complete"
+    # (number of children, effective threshold) once the port is known to be constant
+    _limits: tuple[int, int] | None = None
 
     @classmethod
     def provided_ports(cls):
@@ -100,36 +145,67 @@ class ParallelAllNode(ControlNode):
         self._failures = 0
         super().__init__(name, config)
 
-    def tick(self) -> NodeStatus:
+    def _read_limits(self, n: int) -> tuple[int, int]:
         try:
             max_failures = int(self.get_input("max_failures"))
         except BTRuntimeError:
             raise BTRuntimeError("Missing parameter [max_failures] in ParallelNode") from None
-        cells = self._cells
-        n = len(cells)
         threshold = _effective(max_failures, n)
         if n < threshold:
             raise LogicError("Number of children is less than threshold. Can never fail.")
+        limits = (n, threshold)
+        if self.input_is_constant("max_failures"):
+            self._limits = limits
+        return limits
+
+    def tick(self) -> NodeStatus:
+        cells = self._cells
+        n = len(cells)
+        limits = self._limits
+        if limits is None or limits[0] != n:
+            limits = self._read_limits(n)
+        threshold = limits[1]
         self._cell.status = RUNNING  # set_status(RUNNING)
         skipped = 0
         completed = self._completed
-        for i, child in enumerate(cells):
+        i = -1
+        for child in cells:
+            i += 1
             if i in completed:
                 continue
-            status = tick_cell(child)  # child.execute_tick()
+            # -- status = tick_cell(child) (child.execute_tick()), inlined for speed --------------
+            fast = child.fast
+            try:
+                status = fast(child.node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                if _is_execute_tick(fast, child.node):  # execute_tick's own error
+                    raise
+                raise _wrap_error(child, exc) from exc
+            # -------------------------------------------------------------------------------------
             if status is SUCCESS:
+                child.status = status
                 completed.add(i)
             elif status is FAILURE:
+                child.status = status
                 completed.add(i)
                 self._failures += 1
             elif status is SKIPPED:
                 skipped += 1
-            elif status is IDLE:
-                raise LogicError(f"[{self.name}]: A children should not return IDLE")
+            else:
+                if status is IDLE:
+                    child.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
+                child.status = status
         if skipped == n:
             return SKIPPED
         if skipped + len(completed) >= n:
-            self.reset_children()
+            for cell in cells:  # reset_children(), inlined for speed
+                status = cell.status
+                if status is not IDLE:
+                    if status is RUNNING:
+                        cell.node.halt_node()
+                    cell.status = IDLE  # notifies if observed
             completed.clear()
             result = FAILURE if self._failures >= threshold else SUCCESS
             self._failures = 0

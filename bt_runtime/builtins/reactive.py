@@ -41,9 +41,7 @@ class ReactiveNode(ControlNode):
         stop_on = self._stop_on
         all_skipped = True
         cells = self._cells
-        index = -1
         for child in cells:
-            index += 1
             # -- tick the child and store its status (node.tick_cell, inlined for speed) --
             fast = child.fast
             try:
@@ -56,7 +54,12 @@ class ReactiveNode(ControlNode):
             # ---------------------------------------------------------------------------------
             if status is stop_on:
                 child.status = status
-                self.reset_children()
+                for other in cells:  # reset_children(), inlined for speed
+                    other_status = other.status
+                    if other_status is not IDLE:
+                        if other_status is RUNNING:
+                            other.node.halt_node()
+                        other.status = IDLE  # notifies if observed
                 return stop_on
             if status is RUNNING:
                 child.status = status
@@ -67,6 +70,7 @@ class ReactiveNode(ControlNode):
                             if other_status is RUNNING:
                                 other.node.halt_node()
                             other.status = IDLE  # notifies if observed
+                index = cells.index(child)  # (cells are compared by identity)
                 if self._running_child == -1:
                     self._running_child = index
                 elif self.throw_if_multiple_running and self._running_child != index:
@@ -74,13 +78,20 @@ class ReactiveNode(ControlNode):
                                      f"This throw can be disabled with {self._label}::EnableException(false)")
                 return RUNNING
             if status is SKIPPED:
-                self.halt_child(index)
+                if child.status is RUNNING:  # halt_child(), inlined
+                    child.node.halt_node()
+                child.status = IDLE
             else:
                 if status is IDLE:
                     child.node.set_status(status)  # raises
                 child.status = status
                 all_skipped = False
-        self.reset_children()
+        for child in cells:  # reset_children(), inlined for speed
+            child_status = child.status
+            if child_status is not IDLE:
+                if child_status is RUNNING:
+                    child.node.halt_node()
+                child.status = IDLE  # notifies if observed
         return SKIPPED if all_skipped else self._otherwise
 
     def halt(self) -> None:

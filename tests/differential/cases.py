@@ -350,6 +350,35 @@ case("timeout_not_reached_and_zero",
 case("sleep_zero_is_immediate", tree('<Sequence><Sleep msec="0"/><A name="a"/></Sequence>'), ticks=2)
 
 # ---------------------------------------------------------------------------------------------
+# Ports taken from the blackboard are re-read on every tick (literal ones may be read once)
+# ---------------------------------------------------------------------------------------------
+case("repeat_count_changes_between_ticks", tree('<Repeat num_cycles="{k}"><A name="a"/></Repeat>'),
+     setup={"k": 2}, between={2: {"k": 1}, 3: {"k": 3}}, keys={"k": "int"}, ticks=7)
+case("retry_attempts_change_between_ticks",
+     tree('<RetryUntilSuccessful num_attempts="{k}"><A name="a"/></RetryUntilSuccessful>'),
+     scripts={"a": [F, F, F, F, F, S]}, setup={"k": 3}, between={1: {"k": 1}, 3: {"k": 2}}, keys={"k": "int"},
+     ticks=6)
+case("parallel_thresholds_change_between_ticks",
+     tree('<Parallel success_count="{s}" failure_count="{f}"><A name="a"/><A name="b"/><C name="c"/></Parallel>'),
+     scripts={"a": [S, F, F, S], "b": [F, F, S, F], "c": [S, S, F, F]}, setup={"s": 1, "f": 1},
+     between={1: {"s": 3, "f": 3}, 2: {"s": -1, "f": 2}, 3: {"s": 2, "f": -1}}, keys={"s": "int", "f": "int"},
+     ticks=4)
+case("parallel_all_max_failures_changes_between_ticks",
+     tree('<ParallelAll max_failures="{m}"><Fail name="f"/><A name="a"/></ParallelAll>'),
+     scripts={"a": [S, F, S]}, setup={"m": 1}, between={1: {"m": 2}, 2: {"m": 3}}, keys={"m": "int"}, ticks=3,
+     error="tick")  # 3 > 2 children: the changed value is seen
+case("switch_case_changes_between_ticks",
+     tree('<Switch2 variable="{v}" case_1="{c1}" case_2="2"><A name="s1"/><A name="s2"/><A name="def"/></Switch2>'),
+     setup={"v": "1", "c1": "1"}, between={1: {"c1": "2"}, 2: {"v": "2"}, 3: {"c1": "x"}}, ticks=4)
+case("literal_ports_tick_alike_every_time",
+     tree('<Sequence><Repeat num_cycles="2"><A name="a"/></Repeat><Parallel success_count="2">'
+          '<A name="p1"/><A name="p2"/></Parallel><ParallelAll max_failures="2"><A name="q1"/><A name="q2"/></ParallelAll>'
+          '<Switch2 variable="{v}" case_1="1" case_2="2"><A name="s1"/><A name="s2"/><A name="def"/></Switch2>'
+          '<RetryUntilSuccessful num_attempts="2"><A name="r"/></RetryUntilSuccessful></Sequence>'),
+     scripts={"a": [S, F, S], "p1": [F, S], "q1": [F], "q2": [S, F], "r": [F, S, F, F]}, setup={"v": "1"},
+     between={2: {"v": "3"}}, ticks=6)
+
+# ---------------------------------------------------------------------------------------------
 # Halting
 # ---------------------------------------------------------------------------------------------
 case("halt_tree_running_sequence",
