@@ -5,6 +5,11 @@ A node usually carries one pre-condition and a post-condition or two, so the com
 holds at most one IDLE check and one script per outcome in its cells and calls the compiled
 scripts directly (their errors reported as ``Script.run`` reports them): no dictionary look-ups,
 no loops, no absent scripts on the tick path. Other combinations take the general closure.
+
+The closures read the blackboard and identity from ``node.config`` when they run, so they
+depend only on the node's tick and scripts: while a tree is built (``shared_during_build``) the
+nodes with the same tick and the same conditions share one closure (a tree repeats a few
+condition combinations on many nodes; each closure is about fifteen objects).
 """
 
 from __future__ import annotations
@@ -24,6 +29,26 @@ _IDLE_CHECKS = (("_failureIf", FAILURE, False), ("_successIf", SUCCESS, False), 
                 ("_while", SKIPPED, True))
 
 
+# (tick, after, pre items, post items) -> closure, while the tree builder builds a tree (None
+# otherwise: nothing outlives a build, so a closure never keeps a node or a script alive)
+_build_memo: dict[tuple, Tick] | None = None
+
+
+class shared_during_build:
+    """``with shared_during_build():`` nodes built meanwhile share equal condition closures."""
+
+    __slots__ = ("_previous",)
+
+    def __enter__(self) -> None:
+        global _build_memo
+        self._previous = _build_memo
+        _build_memo = {}
+
+    def __exit__(self, *exc: object) -> None:
+        global _build_memo
+        _build_memo = self._previous
+
+
 def conditions_tick(tick: Tick, cfg: Any, after: After | None) -> Tick:
     """``_execute_tick_full`` for a node with pre/post-conditions and no hooks. ``tick`` is
     ``f(node) -> status``; ``after`` is the library subclass's own step (SyncActionNode's
@@ -33,19 +58,27 @@ def conditions_tick(tick: Tick, cfg: Any, after: After | None) -> Tick:
     calls ``refresh_conditions()``, as it must for the fast paths too."""
     pre = cfg._pre or {}
     post = cfg._post or {}
+    memo = _build_memo
+    if memo is not None:
+        key = (tick, after, tuple(pre.items()), tuple(post.items()))
+        shared = memo.get(key)
+        if shared is not None:
+            return shared
     idle_checks = tuple((script, result, negate) for key, result, negate in _IDLE_CHECKS
                         if (script := pre.get(key)) is not None)
     on_success = tuple(s for k in ("_onSuccess", "_post") if (s := post.get(k)) is not None)
     on_failure = tuple(s for k in ("_onFailure", "_post") if (s := post.get(k)) is not None)
     if len(idle_checks) <= 1 and len(on_success) <= 1 and len(on_failure) <= 1:
-        execute = _one_each(tick, cfg, after, idle_checks, pre.get("_while"), on_success, on_failure)
+        execute = _one_each(tick, after, idle_checks, pre.get("_while"), on_success, on_failure)
     else:
-        execute = _general(tick, cfg, after, idle_checks, pre.get("_while"), on_success, on_failure)
+        execute = _general(tick, after, idle_checks, pre.get("_while"), on_success, on_failure)
     execute.wraps_tick_errors = True  # type: ignore[attr-defined]  # see node._is_execute_tick
+    if memo is not None:
+        memo[key] = execute
     return execute
 
 
-def _one_each(tick: Tick, cfg: Any, after: After | None, idle_checks: tuple, while_script: Any,
+def _one_each(tick: Tick, after: After | None, idle_checks: tuple, while_script: Any,
               on_success: tuple, on_failure: tuple) -> Tick:
     """At most one IDLE check and one script per outcome: everything in closure cells."""
     check, check_text, result, negate = None, "", None, False
@@ -57,6 +90,7 @@ def _one_each(tick: Tick, cfg: Any, after: After | None, idle_checks: tuple, whi
     failure_fn, failure_text = (on_failure[0]._fn, on_failure[0].text) if on_failure else (None, "")
 
     def execute(node: Any) -> NodeStatus:
+        cfg = node.config
         cell = node._cell
         current = cell.status
         status = None
@@ -109,7 +143,7 @@ def _one_each(tick: Tick, cfg: Any, after: After | None, idle_checks: tuple, whi
     return execute
 
 
-def _general(tick: Tick, cfg: Any, after: After | None, idle_checks: tuple, while_script: Any,
+def _general(tick: Tick, after: After | None, idle_checks: tuple, while_script: Any,
              on_success: tuple, on_failure: tuple) -> Tick:
     """Any number of checks and post-conditions."""
     # (the script's closure, its Script for errors, the result, negate): Script.run_bool inlined
@@ -119,6 +153,7 @@ def _general(tick: Tick, cfg: Any, after: After | None, idle_checks: tuple, whil
     failure_runs = tuple(s.run for s in on_failure)
 
     def execute(node: Any) -> NodeStatus:
+        cfg = node.config
         bb = cfg.blackboard
         enums = cfg.enums
         cell = node._cell

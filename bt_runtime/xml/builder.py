@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 from lxml import etree
 
 from ..blackboard import Blackboard, Entry
+from ..condition_tick import shared_during_build
 from ..errors import BehaviorTreeException, XMLLoadError, XMLLogicError, located
 from ..node import NodeConfig, TreeNode, TreeNodeManifest
 from ..ports import (
@@ -103,7 +104,8 @@ class TreeBuilder:
         was_enabled = gc.isenabled()
         gc.disable()
         try:
-            tree = self._build(tree_id, blackboard)
+            with shared_during_build():  # equal pre/post-condition closures built once
+                tree = self._build(tree_id, blackboard)
             if gc.get_freeze_count() == 0:
                 gc.freeze()
                 gc.unfreeze()

@@ -89,3 +89,21 @@ def test_specialised_condition_ticks_match_the_full_path(attrs: str) -> None:
         return seen
 
     assert run(hooked=False) == run(hooked=True)
+
+
+
+@pytest.mark.parametrize("attrs", ['_skipIf="flag"', '_skipIf="flag" _failureIf="flag &gt; 1" _post="n += 1"'])
+def test_nodes_sharing_conditions_each_use_their_own_blackboard(attrs: str) -> None:
+    """Equal condition closures are shared between nodes built together; each node still reads
+    its own blackboard: the same `_skipIf` skips in the SubTree whose `flag` is set only."""
+    f = BehaviorTreeFactory()
+    tree = f.create_tree_from_text(f"""<root BTCPP_format="4" main_tree_to_execute="M">
+      <BehaviorTree ID="M"><Sequence>
+        <Script code="ran_off := 0; ran_on := 0"/>
+        <SubTree ID="S" name="on" flag="1" n="0" ran="{{ran_on}}"/>
+        <SubTree ID="S" name="off" flag="0" n="0" ran="{{ran_off}}"/>
+      </Sequence></BehaviorTree>
+      <BehaviorTree ID="S"><Script code="ran := 1" {attrs}/></BehaviorTree></root>""")
+    assert tree.tick_exactly_once() is NodeStatus.SUCCESS
+    bb = tree.root_blackboard
+    assert (bb.get("ran_off"), bb.get("ran_on")) == (1, 0)
