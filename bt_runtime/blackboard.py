@@ -60,6 +60,8 @@ def _type_mismatch(key: str, previous: PortType, current: PortType) -> LogicErro
                       f"Previously declared type [{previous.name}], current type [{current.name}]")
 
 
+_new_blackboard = object.__new__
+
 # Blackboards whose look-up memory (``_resolved``) holds something: a change of structure
 # empties exactly these, so a memory is always valid and a read never checks a generation.
 _REMEMBERING: weakref.WeakSet[Blackboard] = weakref.WeakSet()
@@ -97,6 +99,19 @@ class Blackboard:
     @classmethod
     def create(cls, parent: Blackboard | None = None) -> Blackboard:
         return cls(parent)
+
+    @classmethod
+    def _for_subtree(cls, parent: Blackboard, remapping: dict[str, str], autoremap: bool) -> Blackboard:
+        """A new SubTree's blackboard, its remappings and autoremap set in one step (the tree
+        builder, once per SubTree). Nothing has resolved a key through a blackboard not yet
+        made, so no remembered look-up can be stale: no ``_structure_changed``."""
+        self = _new_blackboard(cls)
+        self._storage = {}
+        self.parent = parent
+        self._remapping = remapping
+        self.autoremap = autoremap
+        self._resolved = {}
+        return self
 
     # -- structure -----------------------------------------------------------------------------
     def root(self) -> Blackboard:

@@ -48,6 +48,7 @@ _CONDITION_NAMES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
 _PRE_CONDITION_SET = frozenset(PRE_CONDITIONS)
 _CONDITION_ORDER = {name: i for i, name in enumerate(PRE_CONDITIONS + POST_CONDITIONS)}
 _node_config = NodeConfig._for_node
+_subtree_blackboard = Blackboard._for_subtree
 _BAD_INSTANCE_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 _INT_RE = re.compile(r"-?[0-9]+")
 _DOUBLE_RE = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
@@ -366,22 +367,22 @@ class TreeBuilder:
             raise self._err(doc, elem, f"Duplicate SubTree path detected: '{path}'. Use the 'name' attribute "
                                        "to give each SubTree instance a unique name.")
         self._paths.add(path)
-        cfg = self._config(manifest, record.blackboard, uid, path, doc, elem)
-        attrs = dict(elem.attrib)
+        factory = self.factory
+        cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context, self.wake_up,
+                           self.timers, self.clock_holder[0], doc, elem.sourceline, "SubTree")
+        items = tuple(elem.items())  # (one lxml call; dict(elem.attrib) makes a proxy and iterates it)
+        attrs = dict(items)
         self._compile_conditions(cfg, attrs, doc, elem)
         if self.factory.substitution_rules:
             rule = self.factory.substitution_for(name_attr or sub_id, "SubTree", path)
             if rule is not None:  # BT.CPP builds the substitute in its place and expands nothing
                 return self._build_substituted_subtree(rule, name_attr or sub_id, cfg, attrs, record, doc, elem)
 
-        plan = self._subtree_plans.get((sub_id, items := tuple(attrs.items())))
+        plan = self._subtree_plans.get((sub_id, items))
         if plan is None:
             plan = self._subtree_plans[(sub_id, items)] = self._subtree_plan(sub_id, attrs, doc, elem)
         remap, autoremap, remapped, literals, other = plan
-        child_bb = Blackboard(parent=record.blackboard)
-        child_bb.enable_auto_remapping(autoremap)
-        for internal, key in remapped:
-            child_bb.add_subtree_remapping(internal, key)
+        child_bb = _subtree_blackboard(record.blackboard, dict(remapped), autoremap)
         if literals:
             local = child_bb.local_entries()
             for internal, literal, entry_type in literals:
