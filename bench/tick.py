@@ -17,7 +17,7 @@ each repetition (so machine load hits them alike), and each row prints the media
 range (min-max over repetitions) and the ratio of medians to BT.CPP-py and py_trees. Load
 time is measured with the garbage collector on, as a user has it.
 
-Run: python bench/tick.py [--quick] [--shapes a,b] [--sizes 10,100] [--repeat N]
+Run: python bench/tick.py [--quick] [--shapes a,b] [--sizes 10,100] [--repeat N] [--tick-only]
 """
 
 from __future__ import annotations
@@ -338,6 +338,7 @@ def main() -> None:
     parser.add_argument("--loads", type=int, default=7)
     parser.add_argument("--load-shapes", default="mixed", help="generated shapes whose load time is measured")
     parser.add_argument("--load-only", action="store_true", help="only the load-time tables")
+    parser.add_argument("--tick-only", action="store_true", help="only the tick tables (no load times)")
     parser.add_argument("--quick", action="store_true", help="sizes 10,100,1000, 5 repetitions, small loads")
     args = parser.parse_args()
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -352,7 +353,7 @@ def main() -> None:
     run_classic(args.repeat)
     run_generated(args.shapes.split(","), sizes, args.repeat)
     run_nav2(args.repeat)
-    for shape in args.load_shapes.split(","):
+    for shape in ([] if args.tick_only else args.load_shapes.split(",")):
         load_times(shape, [int(s) for s in args.load_sizes.split(",")], args.loads)
     print("\nCPU time per tick: median (min-max) over repetitions; ratio < 1 means bt_runtime is faster.")
 

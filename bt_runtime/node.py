@@ -715,8 +715,9 @@ class SimpleActionNode(SyncActionNode):
     _bare_tick_ok = True  # tick() makes the RUNNING check itself
 
     def tick(self) -> NodeStatus:
-        if self._cell.status is IDLE:
-            self.set_status(RUNNING)
+        cell = self._cell
+        if cell.status is IDLE:
+            cell.status = RUNNING  # set_status(RUNNING); notifies if observed
         status = self._fn(self)
         if status is RUNNING:
             raise LogicError("SyncActionNode MUST never return RUNNING")
@@ -1058,8 +1059,47 @@ class SimpleDecoratorNode(DecoratorNode):
         self._fn = fn
         super().__init__(name, config)
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "tick" in cls.__dict__ and "execute_tick" not in cls.__dict__:
+            cls.execute_tick = DecoratorNode.execute_tick  # the one-frame path below inlines tick()
+
     def tick(self) -> NodeStatus:
         return self._fn(self.child.execute_tick(), self)
+
+    def execute_tick(self) -> NodeStatus:
+        """``DecoratorNode.execute_tick`` (tick, store the status, then reset a completed child,
+        as BT.CPP's executeTick does in that order) in one frame, ``tick()`` inlined: what a
+        parent calls. The child is ticked through its cell; errors are wrapped as the nested
+        execute_tick calls wrap them (the child's tick with its path, the rest with ours)."""
+        cell = self._child_cell
+        try:
+            fast = cell.fast
+            try:
+                child_status = fast(cell.node)
+            except NodeExecutionError:
+                raise
+            except Exception as exc:
+                if _is_execute_tick(fast, cell.node):  # the child's execute_tick's own error
+                    raise
+                raise _wrap_error(cell, exc) from exc
+            if child_status is not SKIPPED:
+                if child_status is IDLE:
+                    cell.node.set_status(child_status)  # raises, as BT.CPP's setStatus(IDLE) does
+                cell.status = child_status
+            status = self._fn(child_status, self)
+        except NodeExecutionError:
+            raise
+        except Exception as exc:
+            raise NodeExecutionError(self.config.path, self.config.registration_id, exc, self.name) from exc
+        if status is not SKIPPED:
+            if status is IDLE:
+                self.set_status(status)  # raises
+            self._cell.status = status
+        cs = cell.status
+        if cs is SUCCESS or cs is FAILURE:
+            cell.status = IDLE
+        return status
 
 
 def tick_cell(cell: NodeCell) -> NodeStatus:

@@ -349,6 +349,24 @@ case("timeout_not_reached_and_zero",
           '</Sequence>'), scripts={"r": [R_, R_, S]}, ticks=4)
 case("sleep_zero_is_immediate", tree('<Sequence><Sleep msec="0"/><A name="a"/></Sequence>'), ticks=2)
 
+# Simple decorators (register_simple_decorator): the child is reset after the decorator's
+# status is stored, whatever the decorator returns
+case("simple_decorator_passes_and_overrides",
+     tree('<Sequence><D name="d1"><A name="a"/></D><D name="d2"><Fail name="f"/></D><A name="b"/></Sequence>'),
+     scripts={"d2": [S, F, S], "a": [S, F, S]}, ticks=3)
+case("simple_decorator_running_over_finished_child_resets_it",
+     tree('<D name="d"><R name="r"/></D>'), scripts={"d": [R_, R_, R_, S], "r": [R_, S, R_, S]}, ticks=5)
+case("simple_decorator_halted_in_reactive_sequence",
+     tree('<ReactiveSequence><C name="c"/><D name="d"><R name="r"/></D></ReactiveSequence>'),
+     scripts={"c": [S, S, F, S], "r": [R_]}, ticks=4)
+case("simple_decorator_with_conditions",
+     tree('<Sequence><D name="d" _skipIf="skip" _onSuccess="n := n + 1"><A name="a"/></D><A name="b"/></Sequence>'),
+     setup={"skip": 0, "n": 0}, between={2: {"skip": 1}}, keys={"n": "int"}, ticks=3)
+case("simple_decorator_returning_idle_errors", tree('<D name="d"><A name="a"/></D>'), scripts={"d": ["IDLE"]},
+     ticks=1, error="tick")
+case("simple_decorator_over_sync_action_returning_running_errors", tree('<D name="d"><A name="a"/></D>'),
+     scripts={"a": [R_]}, ticks=1, error="tick")
+
 # ---------------------------------------------------------------------------------------------
 # Ports taken from the blackboard are re-read on every tick (literal ones may be read once)
 # ---------------------------------------------------------------------------------------------

@@ -7,7 +7,8 @@ if they call the same leaves, in the same order, with the same results, tick aft
 
 Leaf IDs: ``C`` condition, ``A`` sync action, ``R`` stateful action (on_start / on_running /
 on_halted; on_start defaults to RUNNING, on_running to SUCCESS), ``Fail`` / ``Ok`` constant
-actions.
+actions; ``D`` is a simple decorator (``register_simple_decorator``) that logs the child's
+status and returns its own script, else the child's status.
 
 Per step the trace records: the value returned by the tick (or ``HALT`` for a ``halt_tree()``
 step), the leaf callbacks, the root node's stored status afterwards (a control node that
@@ -115,7 +116,12 @@ def _register(factory: Any, leaves: _Leaves, status_of) -> None:
         leaves.log.append(f"tick:{_name(node)}")
         return status_of("SUCCESS")
 
+    def deco(child_status, node):  # a simple decorator: its script, else the child's status
+        leaves.log.append(f"deco:{_name(node)}:{child_status.name}")
+        return status_of(leaves.next(_name(node), child_status.name))
+
     factory.register_simple_condition("C", cond)
+    factory.register_simple_decorator("D", deco)
     factory.register_simple_action("A", action)
     factory.register_simple_stateful_action("R", on_start, on_running, on_halted)
     factory.register_simple_action("Fail", fail)
