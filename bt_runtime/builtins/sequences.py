@@ -142,7 +142,6 @@ class SequentialNode(ControlNode):
             # ---------------------------------------------------------------------------------
             if status is SUCCESS:
                 cell.status = status
-                idx += 1
             elif status is FAILURE:
                 cell.status = status
                 if self._idx:
@@ -150,10 +149,9 @@ class SequentialNode(ControlNode):
                 break
             elif status is RUNNING:
                 cell.status = status
-                self._idx = idx
+                self._idx = cells.index(cell)  # (cells are compared by identity)
                 return RUNNING
             elif status is SKIPPED:
-                idx += 1
                 self._skipped += 1
             else:
                 if status is IDLE:
@@ -198,7 +196,6 @@ class SequentialNode(ControlNode):
             # ---------------------------------------------------------------------------------
             if status is FAILURE:
                 cell.status = status
-                idx += 1
             elif status is SUCCESS:
                 cell.status = status
                 if self._idx:
@@ -206,10 +203,9 @@ class SequentialNode(ControlNode):
                 break
             elif status is RUNNING:
                 cell.status = status
-                self._idx = idx
+                self._idx = cells.index(cell)  # (cells are compared by identity)
                 return RUNNING
             elif status is SKIPPED:
-                idx += 1
                 self._skipped += 1
             else:
                 if status is IDLE:

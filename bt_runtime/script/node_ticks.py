@@ -5,7 +5,9 @@ one call: what a parent calls for such a node, instead of the node's tick callin
 Each handles only entries already found and holding doubles (or, for a constant or a copy, the
 destination's own kind), with no side effect before it decides, and otherwise calls ``slow``,
 the node's general tick, which holds every rule and reports errors. The statement forms are
-read from the ``shape`` of the compiled closures (shortcuts.py, compiler.py).
+read from the ``shape`` of the compiled closures (shortcuts.py, compiler.py). What a tick
+reads comes in as default arguments: local variables, cheaper to read than closure cells, and
+one tuple per tick function instead of a cell object per value (parents pass the node alone).
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
         return None
     _, key, fails, number = shape
 
-    def order_tick(node):
+    def order_tick(node, key=key, fails=fails, number=number, slow=slow):
         cfg = node.config
         entry = cfg.blackboard._resolved.get(key)
         if entry is not None:
@@ -59,7 +61,7 @@ def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
 
 def _update(key: str, arith: Callable[[float, float], float], number: float, slow: NodeTick) -> NodeTick:
     if arith is operator.add:
-        def add_tick(node):
+        def add_tick(node, key=key, number=number, slow=slow):
             entry = node.config.blackboard._resolved.get(key)
             if entry is not None:
                 old = entry.value
@@ -71,7 +73,7 @@ def _update(key: str, arith: Callable[[float, float], float], number: float, slo
             return slow(node)
         return add_tick
 
-    def update_tick(node):
+    def update_tick(node, key=key, arith=arith, number=number, slow=slow):
         entry = node.config.blackboard._resolved.get(key)
         if entry is not None:
             old = entry.value
@@ -86,9 +88,25 @@ def _update(key: str, arith: Callable[[float, float], float], number: float, slo
 
 def _arith(key: str, source: str, arith: Callable[[float, float], float], number: float,
            slow: NodeTick) -> NodeTick:
-    plus = arith is operator.add
+    if arith is operator.add:
+        def plus_tick(node, key=key, source=source, number=number, slow=slow):
+            cfg = node.config
+            resolved = cfg.blackboard._resolved
+            entry = resolved.get(key)
+            src = resolved.get(source)
+            if entry is not None and src is not None:
+                enums = cfg.enums
+                if not (enums and source in enums):
+                    x = src.value
+                    if type(x) is float and type(entry.value) is float:
+                        entry.value = x + number
+                        entry.sequence_id += 1
+                        entry.stamp = _monotonic_ns()
+                        return SUCCESS
+            return slow(node)
+        return plus_tick
 
-    def arith_tick(node):
+    def arith_tick(node, key=key, source=source, arith=arith, number=number, slow=slow):
         cfg = node.config
         resolved = cfg.blackboard._resolved
         entry = resolved.get(key)
@@ -98,7 +116,7 @@ def _arith(key: str, source: str, arith: Callable[[float, float], float], number
             if not (enums and source in enums):
                 x = src.value
                 if type(x) is float and type(entry.value) is float:
-                    entry.value = x + number if plus else arith(x, number)
+                    entry.value = arith(x, number)
                     entry.sequence_id += 1
                     entry.stamp = _monotonic_ns()
                     return SUCCESS
@@ -107,7 +125,7 @@ def _arith(key: str, source: str, arith: Callable[[float, float], float], number
 
 
 def _constant(key: str, kind: type, constant: Any, slow: NodeTick) -> NodeTick:
-    def constant_tick(node):
+    def constant_tick(node, key=key, kind=kind, constant=constant, slow=slow):
         entry = node.config.blackboard._resolved.get(key)
         if entry is not None and type(entry.value) is kind:
             entry.value = constant
@@ -119,7 +137,7 @@ def _constant(key: str, kind: type, constant: Any, slow: NodeTick) -> NodeTick:
 
 
 def _copy(key: str, source: str, slow: NodeTick) -> NodeTick:
-    def copy_tick(node):
+    def copy_tick(node, key=key, source=source, slow=slow):
         cfg = node.config
         resolved = cfg.blackboard._resolved
         entry = resolved.get(key)
