@@ -166,6 +166,20 @@ _new_object = object.__new__
 _NO_PORTS: Mapping[str, str] = MappingProxyType({})
 
 
+def _unconverted_type(port: PortInfo | None) -> type | None:
+    """The type of blackboard value that an input ``port`` returns unchanged (``_converted``):
+    ``object`` for any value (an untyped port), None when every value goes through it."""
+    if port is None or not port.type.strongly_typed:
+        return object
+    ptype = port.type
+    if ptype.kind == "string":
+        return str
+    py_type = ptype.py_type
+    if py_type is not None and not issubclass(py_type, str) and ptype.kind != "int":
+        return py_type
+    return None
+
+
 class NodeCell:
     """The hot state of one node, shared with its parent: ``status``, and ``fast``, what a
     parent calls as ``fast(node)`` to tick it.
@@ -267,6 +281,8 @@ class TreeNode:
     _pre_hook: PreTickHook | None = None
     _post_hook: PostTickHook | None = None
     _monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
+    # input port -> (blackboard key, port info, _unconverted_type), once read from the blackboard
+    _input_pointers: dict[str, tuple[str, PortInfo | None, type]] | None = None
     # True when the class's MRO is a single-inheritance chain: then super().__init__ in any
     # __init__ of the chain is the direct base's __init__, which the hot constructors call
     # directly (super() costs about a microsecond in CPython 3.11, per node built).
@@ -552,6 +568,18 @@ class TreeNode:
             value = cache.get(name, _MISSING)
             if value is not _MISSING:
                 return value
+        pointers = self._input_pointers  # a blackboard port read before: its key is known
+        if pointers is not None:
+            pointer = pointers.get(name)
+            if pointer is not None:
+                key, _, same = pointer
+                bb = self.config.blackboard
+                entry = bb._resolved.get(key) or bb.get_entry(key)  # get_entry's first step inlined
+                if entry is not None:
+                    value = entry.value
+                    # a value the port's type takes as it is (else _read_input converts or raises)
+                    if value is not EMPTY and (same is object or type(value) is same):
+                        return value
         try:
             return self._read_input(name)
         except BehaviorTreeException:
@@ -599,10 +627,17 @@ class TreeNode:
             cached = cache.get(name, _MISSING)
             if cached is not _MISSING:
                 return cached
+        cfg = self.config
+        pointers = self._input_pointers
+        pointer = pointers.get(name) if pointers is not None else None
+        if pointer is not None:  # a port already read from the blackboard: its key and port
+            key, port, _ = pointer
+            bb = cfg.blackboard
+            entry = bb._resolved.get(key) or bb.get_entry(key)  # get_entry's first step inlined
+            return self._converted(name, key, port, entry)
         raw, port = self._raw_input(name)
         if not isinstance(raw, str):
             return raw  # a non-string default is returned as is
-        cfg = self.config
         key = blackboard_key(raw, name)
         if key is None:
             if port is None or not port.type.strongly_typed:
@@ -616,7 +651,15 @@ class TreeNode:
                 cache = self._input_cache = {}
             cache[name] = value  # literals never change: convert once
             return value
-        entry = cfg.blackboard.get_entry(key)
+        if pointers is None:
+            pointers = self._input_pointers = {}
+        pointers[name] = (key, port, _unconverted_type(port))  # the key never changes either
+        return self._converted(name, key, port, cfg.blackboard.get_entry(key))
+
+    def _converted(self, name: str, key: str, port: PortInfo | None, entry: Any) -> Any:
+        """The value of input ``name`` from its blackboard ``entry`` (under ``key``), converted
+        to the port's type."""
+        cfg = self.config
         if entry is None or entry.value is EMPTY:
             raise BTRuntimeError(f"getInput() failed because it was unable to find the key [{name}] "
                                  f"remapped to [{key}]")

@@ -283,3 +283,22 @@ def test_output_port_default_must_name_an_entry(default):
     with pytest.raises(LogicError, match="Output port can only refer to blackboard entries"):
         output_port("out", int, default=default)
     assert output_port("out", int, default="{x}").default == "{x}"
+
+
+def test_blackboard_ports_read_again_see_new_values_converted(factory):
+    """A port read from the blackboard once is read through its remembered key afterwards:
+    every later read still sees the entry's current value, converted as the first one was."""
+    tree = factory.create_tree_from_text(doc('<Read i="{x}" d="{y}" s="{z}" any="{w}"/>'))
+    bb = tree.root_blackboard
+    steps = [({"x": "12", "y": 0.5, "z": "a", "w": "text"}, (12, 0.5, "a", "text")),
+             ({"x": "13", "y": "0.25", "z": "b", "w": "other"}, (13, 0.25, "b", "other")),
+             ({"x": 14, "y": 2.0, "z": "c", "w": ""}, (14, 2.0, "c", ""))]
+    for values, expected in steps:
+        for key, value in values.items():
+            bb.set(key, value)
+        tree.tick_once()
+        assert tuple(Read.seen[name] for name in ("i", "d", "s", "any")) == expected
+        assert type(Read.seen["i"]) is int and type(Read.seen["d"]) is float
+    bb.unset("x")
+    tree.tick_once()
+    assert Read.seen["i"].startswith("error: getInput() failed because it was unable to find the key [i]")
