@@ -9,7 +9,6 @@ tick itself stays cheap. Errors name the file, line and element.
 
 from __future__ import annotations
 
-import gc
 import re
 import time
 from typing import TYPE_CHECKING, Any
@@ -36,17 +35,14 @@ from ..status import PortDirection
 from ..timers import TimerQueue, WakeUpSignal
 from ..tree import SubtreeRecord, Tree
 from .depth import check_tree_depth
-from .document import EXPLICIT_TAG_SET, TreeDefinition, suggest
-from .reader import ELEMENT, XMLDocument
+from .document import POST_CONDITIONS, PRE_CONDITIONS, ElementPlan, TreeDefinition, suggest
+from .long_lived import long_lived
+from .reader import XMLDocument
 
 if TYPE_CHECKING:
     from ..factory import BehaviorTreeFactory
 
-PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")
-POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
-_CONDITION_NAMES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
 _PRE_CONDITION_SET = frozenset(PRE_CONDITIONS)
-_CONDITION_ORDER = {name: i for i, name in enumerate(PRE_CONDITIONS + POST_CONDITIONS)}
 _node_config = NodeConfig._for_node
 _subtree_blackboard = Blackboard._for_subtree
 _BAD_INSTANCE_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
@@ -95,25 +91,10 @@ class TreeBuilder:
         self._subtree_plans: dict[tuple[str, tuple], tuple] = {}  # see _subtree_plan
 
     def build(self, tree_id: str, blackboard: Blackboard | None = None) -> Tree:
-        """Build the tree ``tree_id``. The cyclic garbage collector is paused meanwhile: a build
-        only allocates, and collector passes over the growing heap made loading super-linear.
-
-        A built tree lives long and is freed by reference counting (``Tree.__del__``), so its
-        objects go straight to the collector's oldest generation (``gc.freeze``/``unfreeze``,
-        constant time) instead of being traversed by the next young collections, which cost
-        as much as the build itself. Skipped when the application keeps objects frozen."""
-        was_enabled = gc.isenabled()
-        gc.disable()
-        try:
-            with shared_during_build():  # equal pre/post-condition closures built once
-                tree = self._build(tree_id, blackboard)
-            if gc.get_freeze_count() == 0:
-                gc.freeze()
-                gc.unfreeze()
-            return tree
-        finally:
-            if was_enabled:
-                gc.enable()
+        """Build the tree ``tree_id``, the cyclic collector paused and the tree's objects put
+        in its oldest generation (see long_lived.py)."""
+        with long_lived(), shared_during_build():  # (equal pre/post-condition closures built once)
+            return self._build(tree_id, blackboard)
 
     def _build(self, tree_id: str, blackboard: Blackboard | None) -> Tree:
         definition = self.registry.trees.get(tree_id)
@@ -123,7 +104,7 @@ class TreeBuilder:
         check_tree_depth(self.registry, tree_id)  # before recursing into it
         record = SubtreeRecord(tree_id, "", blackboard if blackboard is not None else Blackboard())
         self._records.append(record)
-        self._build_node(definition.root_element, definition.document, record, "", [tree_id])
+        self._build_node(definition.plan, definition.document, record, "", [tree_id])
         source = definition.document.text
         return Tree(self._records, self.factory.manifests, self.wake_up, self.timers, source_xml=source,
                     clock_holder=self.clock_holder)
@@ -138,20 +119,14 @@ class TreeBuilder:
     def _err(self, doc: XMLDocument, elem: etree._Element, message: str) -> XMLLoadError:
         return XMLLoadError(message, file=doc.file, line=doc.line_of(elem), element=elem.tag)
 
-    def _config(self, manifest: TreeNodeManifest, bb: Blackboard, uid: int, path: str,
-                doc: XMLDocument, elem: etree._Element) -> NodeConfig:
-        factory = self.factory
-        return _node_config(bb, factory.enums, manifest, uid, path, factory.context, self.wake_up,
-                            self.timers, self.clock_holder[0], doc, elem.sourceline, elem.tag)
-
-    def _compile_conditions(self, cfg: NodeConfig, attrs: dict[str, str], doc: XMLDocument,
+    @staticmethod
+    def _compile_conditions(cfg: NodeConfig, conditions: tuple[tuple[str, str], ...], doc: XMLDocument,
                             elem: etree._Element) -> None:
-        if _CONDITION_NAMES.isdisjoint(attrs):
-            return
-        # in BT.CPP's order of each kind (a node has one or two of the eight, usually)
-        for attr in sorted(_CONDITION_NAMES.intersection(attrs), key=_CONDITION_ORDER.__getitem__):
+        """Compile the element's pre/post-condition attributes (its plan lists them in BT.CPP's
+        order) into the config."""
+        for attr, text in conditions:
             try:
-                script = compile_script(attrs[attr])
+                script = compile_script(text)
             except BehaviorTreeException as exc:  # BT.CPP: LogicError("Error in the script ...")
                 raise XMLLogicError(f"{attr}: {exc}", file=doc.file, line=doc.line_of(elem),
                                     element=elem.tag) from None
@@ -163,27 +138,23 @@ class TreeBuilder:
         return m.group(0) if m else None
 
     # -- nodes ---------------------------------------------------------------------------------
-    def _build_node(self, elem: etree._Element, doc: XMLDocument, record: SubtreeRecord, prefix: str,
+    def _build_node(self, plan: ElementPlan, doc: XMLDocument, record: SubtreeRecord, prefix: str,
                     stack: list[str]) -> TreeNode:
-        tag = elem.tag
+        """Build the node of ``plan`` (what the registry read of its element, see ElementPlan)
+        and its children: no lxml call here, so a SubTree expanded in many places reads its
+        elements once."""
+        tag, type_id, name, items, attrs, conditions, child_plans, elem = plan
         if tag == "SubTree":
-            return self._build_subtree(elem, doc, record, prefix, stack)
-        type_id = elem.get("ID") if tag in EXPLICIT_TAG_SET else tag
+            return self._build_subtree(plan, doc, record, prefix, stack)
         factory = self.factory
         manifests = factory.manifests
         manifest = manifests.get(type_id)
         if manifest is None:
             raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
-        items = elem.items()  # one lxml call (each costs about a microsecond)
-        if not items:  # the common cases (no attribute, or just a name) without building a dict
-            attrs = None
+        if name is None:
             name = type_id
-        elif len(items) == 1 and items[0][0] == "name":
+        elif len(items) == 1:  # just a name: no port pass (the common case after no attributes)
             attrs = None
-            name = items[0][1]
-        else:
-            attrs = dict(items)
-            name = attrs.get("name", type_id)
         # (every forbidden character is unprintable; isprintable() costs far less than the search)
         if not name.isprintable() and _BAD_INSTANCE_CHAR.search(name) is not None:
             bad = self._check_instance_name(name)
@@ -194,17 +165,16 @@ class TreeBuilder:
         path = prefix + name + (f"::{uid}" if name == type_id else "")
         rule = factory.substitution_for(name, type_id, path) if factory.substitution_rules else None
         builder = factory.builders[type_id] if rule is None else factory.substitution_builder(rule)
-        # self._config(...), inlined: this runs once per node
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
-                           self.wake_up, self.timers, self.clock_holder[0], doc, elem.sourceline, tag)
+                           self.wake_up, self.timers, self.clock_holder[0], doc, elem)
         # Port passes only when there is something to do (most nodes have no port attributes).
         given = () if attrs is None else self._assign_ports(cfg, manifest, attrs, doc, elem)
         if manifest.ports:
             self._fill_defaults(cfg, manifest, given)
             if given:
                 self._check_literals_and_create_entries(cfg, manifest, given, record.blackboard, doc, elem)
-        if attrs is not None:
-            self._compile_conditions(cfg, attrs, doc, elem)
+        if conditions:
+            self._compile_conditions(cfg, conditions, doc, elem)
         try:
             node = builder(name, cfg)
         except XMLLoadError:
@@ -215,11 +185,11 @@ class TreeBuilder:
             raise self._err(doc, elem, f"creating node '{path}' [{type_id}] failed: "
                                        f"{type(exc).__name__}: {exc}") from exc
         record.nodes.append(node)
-        children = elem[:]  # element_children(elem), inlined: most nodes are leaves
-        if children:
-            for child_elem in children:
-                if type(child_elem) is ELEMENT or isinstance(child_elem.tag, str):
-                    node.add_child(self._build_node(child_elem, doc, record, prefix, stack))
+        if child_plans:
+            build_node = self._build_node
+            add_child = node.add_child
+            for child_plan in child_plans:
+                add_child(build_node(child_plan, doc, record, prefix, stack))
         return node
 
     def _assign_ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str],
@@ -349,9 +319,11 @@ class TreeBuilder:
         other.setdefault("_autoremap", "true" if autoremap else "false")
         return remap, autoremap, tuple(remapped), tuple(literals), other
 
-    def _build_subtree(self, elem: etree._Element, doc: XMLDocument, record: SubtreeRecord, prefix: str,
+    def _build_subtree(self, plan: ElementPlan, doc: XMLDocument, record: SubtreeRecord, prefix: str,
                        stack: list[str]) -> TreeNode:
-        sub_id = elem.get("ID")
+        _, sub_id, name_attr, items, attrs, conditions, _, elem = plan
+        if attrs is None:
+            attrs = {}
         definition: TreeDefinition | None = self.registry.trees.get(sub_id)
         if definition is None:
             raise self._err(doc, elem, f"SubTree ID '{sub_id}' is not a registered BehaviorTree"
@@ -361,7 +333,6 @@ class TreeBuilder:
                                        "itself (directly or indirectly)")
         manifest = self.factory.manifests["SubTree"]
         uid = self._next_uid()
-        name_attr = elem.get("name")
         path = prefix + (name_attr if name_attr is not None else f"{sub_id}::{uid}")
         if path in self._paths:
             raise self._err(doc, elem, f"Duplicate SubTree path detected: '{path}'. Use the 'name' attribute "
@@ -369,10 +340,9 @@ class TreeBuilder:
         self._paths.add(path)
         factory = self.factory
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context, self.wake_up,
-                           self.timers, self.clock_holder[0], doc, elem.sourceline, "SubTree")
-        items = tuple(elem.items())  # (one lxml call; dict(elem.attrib) makes a proxy and iterates it)
-        attrs = dict(items)
-        self._compile_conditions(cfg, attrs, doc, elem)
+                           self.timers, self.clock_holder[0], doc, elem)
+        if conditions:
+            self._compile_conditions(cfg, conditions, doc, elem)
         if self.factory.substitution_rules:
             rule = self.factory.substitution_for(name_attr or sub_id, "SubTree", path)
             if rule is not None:  # BT.CPP builds the substitute in its place and expands nothing
@@ -399,7 +369,7 @@ class TreeBuilder:
         record.nodes.append(node)
         sub_record = SubtreeRecord(sub_id, path, child_bb)
         self._records.append(sub_record)
-        root = self._build_node(definition.root_element, definition.document, sub_record, path + "/",
+        root = self._build_node(definition.plan, definition.document, sub_record, path + "/",
                                 [*stack, sub_id])
         node.set_child(root)
         return node

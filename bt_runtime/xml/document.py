@@ -20,6 +20,7 @@ from ..errors import XMLLoadError
 from ..ports import RESERVED_ATTRIBUTES, PortInfo, find_forbidden_char, port_type
 from ..status import NodeType, PortDirection
 from .depth import Shape
+from .long_lived import long_lived
 from .reader import ELEMENT, XMLDocument, element_children, parse_xml_text, read_xml_file
 from .v3 import BTFormatWarning, is_v3, translate_v3
 
@@ -33,6 +34,19 @@ _PORT_TAGS = {"input_port": PortDirection.INPUT, "output_port": PortDirection.OU
               "inout_port": PortDirection.INOUT}
 
 
+# What the builder needs of one element, read from lxml once when the document is checked (a
+# SubTree used in many places is expanded as often; lxml calls cost 0.1-0.3 us each):
+# (tag, type ID (a SubTree's ID), name attribute or None, attribute items, attributes as a dict
+# or None when there are none, pre/post-condition attributes in BT.CPP's order, children's
+# plans, the element itself for line numbers). Never mutated.
+ElementPlan = tuple[str, str, "str | None", tuple, "dict[str, str] | None", tuple, tuple, etree._Element]
+
+PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")  # in BT.CPP's order
+POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
+CONDITION_ATTRIBUTES = PRE_CONDITIONS + POST_CONDITIONS
+_CONDITION_ATTRIBUTE_SET = frozenset(CONDITION_ATTRIBUTES)
+
+
 @dataclass
 class TreeDefinition:
     """A registered <BehaviorTree>: its single root element and where it came from."""
@@ -40,6 +54,7 @@ class TreeDefinition:
     tree_id: str
     element: etree._Element  # the <BehaviorTree> element
     document: XMLDocument
+    plan: ElementPlan | None = None  # of the root element (see ElementPlan)
 
     @cached_property
     def root_element(self) -> etree._Element:
@@ -100,12 +115,14 @@ class TreeRegistry:
 
     # -- entry points --------------------------------------------------------------------------
     def load_text(self, text: str | bytes, file: str | None = None) -> LoadResult:
-        doc = parse_xml_text(text, file=file)
-        return self._load(doc, [], self._include_roots(doc))
+        with long_lived():  # a document's elements and plans live as long as the registry
+            doc = parse_xml_text(text, file=file)
+            return self._load(doc, [], self._include_roots(doc))
 
     def load_file(self, path: str | Path) -> LoadResult:
-        doc = read_xml_file(path)
-        return self._load(doc, [str(Path(path).resolve())], self._include_roots(doc))
+        with long_lived():
+            doc = read_xml_file(path)
+            return self._load(doc, [str(Path(path).resolve())], self._include_roots(doc))
 
     def _include_roots(self, top: XMLDocument) -> tuple[Path, ...]:
         """Where includes of a document loaded by the user may lead: below its folder (the
@@ -170,13 +187,14 @@ class TreeRegistry:
 
         # Validate every tree before registering any, so a bad document changes nothing.
         shapes = []
+        plans = []
         for bt in tree_elements:
             root_elem = element_children(bt)[0]
             shape = Shape(1, root_elem, [])
-            self._check_node(doc, root_elem, 1, None, shape)
+            plans.append(self._check_node(doc, root_elem, 1, None, shape))
             shapes.append(shape)
-        for bt, tree_id, shape in zip(tree_elements, ids, shapes):
-            definition = self.trees[tree_id] = TreeDefinition(tree_id, bt, doc)
+        for bt, tree_id, shape, plan in zip(tree_elements, ids, shapes, plans):
+            definition = self.trees[tree_id] = TreeDefinition(tree_id, bt, doc, plan)
             definition._depth_shape = shape  # type: ignore[attr-defined]  # see depth.py
         new_ids = [i for i in ids if i not in before]
         return LoadResult(new_ids, ids, main_tree, doc)
@@ -240,39 +258,52 @@ class TreeRegistry:
 
     # -- per-tree validation (spec 2.8) ----------------------------------------------------------
     def _check_node(self, doc: XMLDocument, elem: etree._Element, depth: int,
-                    parent: etree._Element | None, shape: Shape) -> None:
+                    parent: etree._Element | None, shape: Shape) -> ElementPlan:
         """Check one element and its children; note in ``shape`` its SubTrees and the
-        deepest other element (what the expanded-depth check needs, without a walk of its own)."""
+        deepest other element (what the expanded-depth check needs, without a walk of its own).
+        Returns the element's plan, what the builder reads instead of the element."""
         if depth > MAX_DEPTH:
             raise self._err(doc, elem, f"Maximum XML nesting depth exceeded (limit: {MAX_DEPTH}). "
                                        "The XML is too deeply nested.")
         manifests = self.factory.manifests
         tag = elem.tag
-        children = elem[:]  # element_children(elem), inlined: most nodes are leaves
+        children = elem[:] if len(elem) else ()  # element_children(elem), inlined: most are leaves
         if children:
             children = [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
+        items = elem.items()  # one lxml call for every attribute (elem.get costs as much)
+        if items:
+            items = tuple(items)
+            attrs = dict(items)
+            get = attrs.get
+            name = get("name")
+            conditions = (() if _CONDITION_ATTRIBUTE_SET.isdisjoint(attrs)
+                          else tuple((a, attrs[a]) for a in CONDITION_ATTRIBUTES if a in attrs))
+        else:
+            items = conditions = ()
+            attrs = name = None
+            get = _no_attribute
         if tag == "SubTree":
+            sub_id = get("ID")
             if children:
-                raise self._err(doc, elem, f"<SubTree> with ID '{elem.get('ID')}' should not have any child")
-            sub_id = elem.get("ID")
+                raise self._err(doc, elem, f"<SubTree> with ID '{sub_id}' should not have any child")
             if sub_id is None:
                 raise self._err(doc, elem, "The tag <SubTree> must have the attribute [ID]")
             if sub_id in manifests:
                 raise self._err(doc, elem, "The attribute [ID] of tag <SubTree> must not use the name of "
                                            "a registered Node")
             shape.subtrees.append((sub_id, elem, depth))
-            return
+            return (tag, sub_id, name, items, attrs, conditions, (), elem)
         if depth >= shape.plain_depth:  # (the last deepest, as depth.py's own walk finds)
             shape.plain_depth = depth
             shape.plain_elem = elem
         explicit = tag in EXPLICIT_TAG_SET
         if explicit:
-            type_id = elem.get("ID")
+            type_id = get("ID")
             if type_id is None:
                 raise self._err(doc, elem, f"The tag <{tag}> must have the attribute [ID]")
         else:
             type_id = tag
-            if elem.get("ID") is not None:
+            if attrs is not None and "ID" in attrs:
                 raise self._err(doc, elem, f"Attribute [ID] is not allowed in <{tag}>")
         if explicit and parent is not None and parent.tag == "ReactiveSequence":
             raise self._err(doc, elem, f"Unknown node type: {tag} (BehaviorTree.CPP rejects explicit "
@@ -293,8 +324,14 @@ class TreeRegistry:
                 self._check_reactive_children(doc, elem, children)
         if children and node_type in _LEAF_TYPES:
             raise self._err(doc, elem, f"The node '{type_id}' must not have any child")
-        for child in children:
-            self._check_node(doc, child, depth + 1, elem, shape)
+        if children:
+            plans = []
+            for child in children:
+                plans.append(self._check_node(doc, child, depth + 1, elem, shape))
+            plans = tuple(plans)
+        else:
+            plans = ()
+        return (tag, type_id, name, items, attrs, conditions, plans, elem)
 
     def _check_reactive_children(self, doc: XMLDocument, elem: etree._Element,
                                  children: list[etree._Element]) -> None:
@@ -312,6 +349,11 @@ class TreeRegistry:
 
 
 _DECORATOR, _CONTROL = NodeType.DECORATOR, NodeType.CONTROL
+
+
+def _no_attribute(name: str) -> None:
+    return None
+
 _ASYNC_CONTROL_NAMES = frozenset({"AsyncSequence", "ThreadedAction", "StatefulActionNode", "CoroActionNode"})
 _LEAF_TYPES = (NodeType.ACTION, NodeType.CONDITION)
 
