@@ -188,9 +188,12 @@ class SetBlackboardNode(SyncActionNode):
         if dst is not None and dst.type.name != STRING.name and isinstance(out, str):
             if dst.type.kind == "anytype":
                 # BT.CPP quirk: an untyped entry has no converter, the conversion yields an empty
-                # BT::Any, so the entry becomes "not initialized" and typed BT::Any from then on.
+                # BT::Any, so the entry becomes "not initialized". A local entry is typed BT::Any
+                # from then on; one reached through a remapping keeps its type (BT.CPP's set()
+                # takes its create-entry branch for keys it does not store itself).
                 dst.write(EMPTY)
-                dst.type = ANY
+                if output_key[:1] == "@" or bb.local_entries().get(output_key) is dst:
+                    dst.type = ANY
                 return SUCCESS
             if dst.type.kind == "any":
                 raise LogicError(f"Can't convert string [{out}] to type [BT::Any]: You didn't implement "

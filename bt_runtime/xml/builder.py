@@ -20,10 +20,10 @@ from ..condition_tick import shared_during_build
 from ..errors import BehaviorTreeException, XMLLoadError, XMLLogicError, located
 from ..node import NodeConfig, TreeNode, TreeNodeManifest
 from ..ports import (
+    ANYTYPE,
     DOUBLE,
     INT,
     INT64,
-    STRING,
     blackboard_key,
     is_allowed_port_name,
     is_strict_blackboard_pointer,
@@ -310,7 +310,8 @@ class TreeBuilder:
                 remapped.append((internal, key))
             else:
                 literal = subtree_literal(value)
-                entry_type = (STRING if isinstance(literal, str) else
+                # a string goes in as BT.CPP's set<std::string> on a new entry: untyped
+                entry_type = (ANYTYPE if isinstance(literal, str) else
                               DOUBLE if isinstance(literal, float) else
                               INT if -(2**31) <= literal < 2**31 else INT64)
                 literals.append((internal, literal, entry_type))

@@ -512,6 +512,20 @@ case("set_blackboard_copy_of_untyped_becomes_any",
 case("set_blackboard_twice_into_untyped_destination",
      tree('<Sequence><Script code="x := 1"/><SetBlackboard output_key="x" value="2"/>'
           '<SetBlackboard output_key="x" value="3"/></Sequence>'), ticks=1, error="tick")
+# Found by the scripted random trees (test_random_scripted_trees.py):
+case("set_blackboard_through_remap_keeps_the_entry_untyped",  # set() on a remapped key: create branch
+     tree('<SubTree ID="S" p="lit" q="{s}"/>',
+          '<BehaviorTree ID="S"><SetBlackboard output_key="q" value="{p}"/></BehaviorTree>'),
+     setup={"s": "abc"}, keys={"s": "string"}, ticks=3)
+case("subtree_string_literal_entry_is_untyped",  # set<std::string> on a new entry: AnyTypeAllowed
+     tree('<SubTree ID="S" p="x"/>',
+          '<BehaviorTree ID="S"><Sequence><SetBlackboard output_key="p" value="{p}"/>'
+          '<SetBlackboard output_key="p" value="7"/></Sequence></BehaviorTree>'),
+     ticks=1, error="tick")
+case("subtree_string_literal_retyped_by_script",
+     tree('<SubTree ID="S" p="x"/>',
+          '<BehaviorTree ID="S"><Sequence><Script code="p := 5"/><Script code="p = 2.5"/>'
+          '<ScriptCondition code="p == 2"/></Sequence></BehaviorTree>'), ticks=1, error="tick")
 case("set_blackboard_empty_source_fails",
      tree('<SetBlackboard output_key="a" value="{nope}"/>'), ticks=1)
 case("unset_blackboard",
