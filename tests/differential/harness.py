@@ -164,7 +164,12 @@ def _read_ours(bb, key: str, kind: str) -> Any:
         value = bb.get(key, _OUR_KINDS[kind])
     except Exception:
         return None
-    return round(value, 9) if kind == "double" else value
+    return _double(value) if kind == "double" else value
+
+
+def _double(value: float) -> float | str:
+    """Rounded, and NaN as a string: NaN != NaN would make equal traces differ."""
+    return "nan" if value != value else round(value, 9)
 
 
 def run_ours(case: Case) -> Trace:
@@ -261,7 +266,7 @@ def run_oracle(case: Case) -> Trace:
         for key, kind in case.keys.items():
             try:
                 v = getters[kind](key)
-                row[key] = round(v, 9) if kind == "double" else v
+                row[key] = _double(v) if kind == "double" else v
             except Exception:
                 row[key] = None
         trace.values.append(row)
