@@ -88,6 +88,40 @@ def _update(key: str, arith: Callable[[float, float], float], number: float, slo
 
 def _arith(key: str, source: str, arith: Callable[[float, float], float], number: float,
            slow: NodeTick) -> NodeTick:
+    if arith is operator.add and key == source:
+        def increment_tick(node, key=key, number=number, slow=slow):  # x := x + C: one look-up
+            cfg = node.config
+            entry = cfg.blackboard._resolved.get(key)
+            if entry is not None:
+                enums = cfg.enums
+                if not (enums and key in enums):
+                    x = entry.value
+                    if type(x) is float:
+                        entry.value = x + number
+                        entry.sequence_id += 1
+                        entry.stamp = _monotonic_ns()
+                        return SUCCESS
+            return slow(node)
+        return increment_tick
+
+    if arith is operator.mul:
+        def times_tick(node, key=key, source=source, number=number, slow=slow):
+            cfg = node.config
+            resolved = cfg.blackboard._resolved
+            entry = resolved.get(key)
+            src = resolved.get(source)
+            if entry is not None and src is not None:
+                enums = cfg.enums
+                if not (enums and source in enums):
+                    x = src.value
+                    if type(x) is float and type(entry.value) is float:
+                        entry.value = x * number
+                        entry.sequence_id += 1
+                        entry.stamp = _monotonic_ns()
+                        return SUCCESS
+            return slow(node)
+        return times_tick
+
     if arith is operator.add:
         def plus_tick(node, key=key, source=source, number=number, slow=slow):
             cfg = node.config

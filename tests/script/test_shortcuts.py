@@ -17,7 +17,7 @@ from bt_runtime.status import NodeStatus
 
 STATEMENTS = ["x := 1", "x := 2.5", "x := 'text'", "x = 1", "x := y", "x = y", "x := y + 1",
               "x := y - 0.5", "x := y * 2", "x := y / 4", "x := x + 1", "x += 1", "x -= 2",
-              "x *= 3", "x /= 2", "x += 0.25", "@x := 1", "@x += 1", "x := @y + 1", "x := y; x += 1",
+              "x *= 3", "x /= 2", "x += 0.25", "y := y + 1", "@x := 1", "@x += 1", "x := @y + 1", "x := y; x += 1",
               "!y", "x := !y", "!@y"]
 
 # (name, how the entry is prepared on a fresh blackboard): the kinds a shortcut must either
