@@ -317,37 +317,62 @@ def _general_assign(op: str, key: str, value: Node, names: dict[str, str]) -> Fn
 
 def _emit(node: Node, names: dict[str, str]) -> Fn:
     """``compile_node`` of a node already through ``_fold_all``."""
-    if isinstance(node, Literal):
-        return _literal(node.value)
-    if isinstance(node, Name):
-        return _name(names.get(node.name, node.name))
-    if isinstance(node, Unary):
-        operand = node.operand
-        if isinstance(operand, Name):
-            operand = Name(names.get(operand.name, operand.name))
-        return _unary(node.op, _emit(node.operand, names), operand)
-    if isinstance(node, Binary):
-        left = node.left
+    emit = _EMITTERS.get(type(node))  # one look-up instead of a chain of isinstance tests
+    if emit is None:
+        for kind, emit in _EMITTERS.items():  # (a subclass of an AST node class)
+            if isinstance(node, kind):
+                return emit(node, names)
+        raise TypeError(f"unknown AST node {node!r}")
+    return emit(node, names)
+
+
+def _emit_literal(node: Literal, names: dict[str, str]) -> Fn:
+    return _literal(node.value)
+
+
+def _emit_name(node: Name, names: dict[str, str]) -> Fn:
+    return _name(names.get(node.name, node.name))
+
+
+def _emit_unary(node: Unary, names: dict[str, str]) -> Fn:
+    operand = node.operand
+    if isinstance(operand, Name):
+        operand = Name(names.get(operand.name, operand.name))
+    return _unary(node.op, _emit(node.operand, names), operand)
+
+
+def _emit_binary(node: Binary, names: dict[str, str]) -> Fn:
+    left = node.left
+    if isinstance(left, Name):
+        left = Name(names.get(left.name, left.name))
+    return _binary(node.op, _emit(node.left, names), _emit(node.right, names), node.right, left)
+
+
+def _emit_compare(node: Compare, names: dict[str, str]) -> Fn:
+    operands = node.operands
+    if len(node.ops) == 1:
+        left, right = operands
+        fns = (_emit(left, names), _emit(right, names))
         if isinstance(left, Name):
             left = Name(names.get(left.name, left.name))
-        return _binary(node.op, _emit(node.left, names), _emit(node.right, names), node.right, left)
-    if isinstance(node, Compare):
-        fns = [_emit(n, names) for n in node.operands]
-        if len(node.ops) == 1:
-            left = node.operands[0]
-            if isinstance(left, Name):
-                left = Name(names.get(left.name, left.name))
-            return _compare_one(node.ops[0], fns[0], fns[1], node.operands[1], left)
-        return _compare_chain(node.ops, fns)
-    if isinstance(node, Ternary):
-        return _ternary(_emit(node.cond, names), _emit(node.then, names), _emit(node.other, names))
-    if isinstance(node, Assign):
-        if isinstance(node.target, Name):
-            key = names.get(node.target.name, node.target.name)
-            return (shortcut_assign(node.op, key, node.value, names, _general_assign)
-                    or _general_assign(node.op, key, node.value, names))
-        return make_bad_assign(node.op)
-    raise TypeError(f"unknown AST node {node!r}")
+        return _compare_one(node.ops[0], fns[0], fns[1], right, left)
+    return _compare_chain(node.ops, [_emit(n, names) for n in operands])
+
+
+def _emit_ternary(node: Ternary, names: dict[str, str]) -> Fn:
+    return _ternary(_emit(node.cond, names), _emit(node.then, names), _emit(node.other, names))
+
+
+def _emit_assign(node: Assign, names: dict[str, str]) -> Fn:
+    if isinstance(node.target, Name):
+        key = names.get(node.target.name, node.target.name)
+        return (shortcut_assign(node.op, key, node.value, names, _general_assign)
+                or _general_assign(node.op, key, node.value, names))
+    return make_bad_assign(node.op)
+
+
+_EMITTERS: dict[type, Any] = {Literal: _emit_literal, Name: _emit_name, Unary: _emit_unary, Binary: _emit_binary,
+                              Compare: _emit_compare, Ternary: _emit_ternary, Assign: _emit_assign}
 
 
 # --- templates: scripts that differ only in their variable names share one parse ---------------
@@ -357,8 +382,9 @@ def _emit(node: Node, names: dict[str, str]) -> Fn:
 _IDENTIFIER = re.compile(r"(?<![A-Za-z0-9_@.])([A-Za-z_][A-Za-z0-9_]*)")  # split() keeps the names
 # Texts the template path leaves to the plain parse: string literals and '@' (identifiers inside
 # them), non-ASCII, and an identifier right after a dot ('a..b', '65.x'), which the look-behind
-# would leave unrenamed where it could collide with a placeholder.
-_NOT_TEMPLATE = re.compile(r"['@]|\.[A-Za-z_]|[^\x00-\x7f]")
+# would leave unrenamed where it could collide with a placeholder. All of these stay in the
+# text between the names the split finds, so the key is tested (shorter, and no extra pass).
+_DOT_NAME = re.compile(r"\.[A-Za-z_]")
 _MARK = "\x00"  # stands for a variable in a template's key (the text itself never contains it)
 _templates: dict[str, tuple[list[Node], tuple[str, ...]] | None] = {}  # key -> (folded statements, placeholders)
 _TEMPLATES_KEPT = 4096
@@ -370,13 +396,15 @@ def _parse_via_template(text: str) -> tuple[list[Node], dict[str, str]] | None:
     not fit for a template or its template does not parse (then the plain parse reports the
     error with the text's own positions and names). The token kinds of the template are
     those of the text, so it parses exactly when the text does, into the same tree."""
-    if _NOT_TEMPLATE.search(text) is not None or _MARK in text:
+    if _MARK in text:
         return None
     parts = _IDENTIFIER.split(text)  # [text, name, text, name, ..., text]: one pass
+    key = _MARK.join(parts[0::2])
+    if "'" in key or "@" in key or not key.isascii() or ("." in key and _DOT_NAME.search(key) is not None):
+        return None
     found = parts[1::2]
     if "true" in found or "false" in found:  # literals, not variables: no template
         return None
-    key = _MARK.join(parts[0::2])
     cached = _templates.get(key, EMPTY)
     if cached is EMPTY:
         pieces = key.split(_MARK)
@@ -486,7 +514,7 @@ def compile_script(text: str) -> Script:
         via_template = _parse_via_template(text)
         if via_template is not None:
             statements, names = via_template
-            fn = _sequence([_emit(s, names) for s in statements])
+            fn = _emit(statements[0], names) if len(statements) == 1 else _sequence([_emit(s, names) for s in statements])
         else:
             fn = _sequence([compile_node(s) for s in parse(text)])
     except ParseError as exc:
