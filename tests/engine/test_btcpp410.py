@@ -133,3 +133,17 @@ def test_builtin_nodes_include_try_catch(factory):
     builtins = factory.builtin_nodes()
     assert len(builtins) == 42 and "TryCatch" in builtins
     assert "ManualSelector" not in builtins and "SequenceStar" not in builtins
+
+
+
+def test_subtree_literal_queue_feeds_a_loop(factory):
+    """4.10 (issue 1065): a SubTree literal "1;2;3" read by LoopDouble is converted to a queue on
+    every activation; 4.8.2 fails ("no known safe conversion"), so the differential suite avoids it."""
+    tree = factory.create_tree_from_text(doc(
+        '<SubTree ID="L" queue="1;2;3" log="{log}"/>',
+        '<BehaviorTree ID="L"><LoopDouble queue="{queue}" value="{number}">'
+        '<Script code="log := log .. number .. \' \'"/></LoopDouble></BehaviorTree>'))
+    tree.root_blackboard.set("log", "")
+    assert tree.tick_while_running() is S
+    assert tree.tick_while_running() is S
+    assert tree.root_blackboard.get("log") == "1.000000 2.000000 3.000000 " * 2
