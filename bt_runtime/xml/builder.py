@@ -24,6 +24,7 @@ from ..ports import (
     DOUBLE,
     INT,
     INT64,
+    RESERVED_ATTRIBUTES,
     blackboard_key,
     is_allowed_port_name,
     is_strict_blackboard_pointer,
@@ -89,6 +90,7 @@ class TreeBuilder:
         # literal on many nodes is checked once (the conversion is a pure function of these)
         self._literals_ok: set[tuple[int, str]] = set()
         self._subtree_plans: dict[tuple[str, tuple], tuple] = {}  # see _subtree_plan
+        self._port_tables: dict[TreeNodeManifest, tuple] = {}  # see _port_table
 
     def build(self, tree_id: str, blackboard: Blackboard | None = None) -> Tree:
         """Build the tree ``tree_id``, the cyclic collector paused and the tree's objects put
@@ -168,11 +170,12 @@ class TreeBuilder:
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
                            self.wake_up, self.timers, self.clock_holder[0], doc, elem)
         # Port passes only when there is something to do (most nodes have no port attributes).
-        given = () if attrs is None else self._assign_ports(cfg, manifest, attrs, doc, elem)
-        if manifest.ports:
-            self._fill_defaults(cfg, manifest, given)
-            if given:
-                self._check_literals_and_create_entries(cfg, manifest, given, record.blackboard, doc, elem)
+        if attrs is not None:
+            self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
+        elif manifest.ports:
+            defaults = self._port_table(manifest)[1]
+            if defaults:
+                self._fill_defaults(cfg, defaults, ())
         if conditions:
             self._compile_conditions(cfg, conditions, doc, elem)
         try:
@@ -192,74 +195,106 @@ class TreeBuilder:
                 add_child(build_node(child_plan, doc, record, prefix, stack))
         return node
 
-    def _assign_ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str],
-                      doc: XMLDocument, elem: etree._Element) -> list[str]:
-        given: list[str] = []
+    def _port_table(self, manifest: TreeNodeManifest) -> tuple[dict[str, tuple], tuple]:
+        """What a node type's ports mean for the port pass, worked out once per type in a build:
+        {attribute: (to inputs, to outputs, port, literal to check)} for the attributes that
+        are ports, and the defaults a node gets for ports it does not give:
+        ((name, text, to inputs, to outputs), ...)."""
+        table = self._port_tables.get(manifest)
+        if table is None:
+            entries: dict[str, tuple] = {}
+            defaults = []
+            for name, port in manifest.ports.items():
+                direction = port.direction
+                to_in, to_out = direction is not PortDirection.OUTPUT, direction is not PortDirection.INPUT
+                if name not in RESERVED_ATTRIBUTES and _allowed_port_name(name):
+                    ptype = port.type
+                    # (a string converts to a string port without fail: nothing to check)
+                    check = to_in and ptype.strongly_typed and ptype.has_converter and ptype.kind != "string"
+                    entries[name] = (to_in, to_out, port, check)
+                if port.has_default:
+                    text = port.default_string()
+                    defaults.append((name, text, to_in, to_out and blackboard_key(text, name) is not None))
+            table = self._port_tables[manifest] = (entries, tuple(defaults))
+        return table
+
+    def _ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str], bb: Blackboard,
+               doc: XMLDocument, elem: etree._Element) -> None:
+        """The port pass of one node: its port attributes into the config (an unknown port is
+        an error), defaults for the others, then blackboard entries for the remapped ports and
+        the conversion check of literal ones (after every attribute was accepted, as before)."""
+        entries, defaults = self._port_table(manifest)
+        given: list[tuple[str, str, tuple]] = []
+        inputs = cfg.input_ports
+        outputs = cfg.output_ports
         for attr, value in attrs.items():
-            if attr in ("ID", "name", "_autoremap") or attr in PRE_CONDITIONS or attr in POST_CONDITIONS:
-                continue
-            if not _allowed_port_name(attr):
-                cfg.other_attributes[attr] = value
-                continue
-            port = manifest.ports.get(attr)
-            if port is None:
+            entry = entries.get(attr)
+            if entry is None:
+                if attr in RESERVED_ATTRIBUTES:
+                    continue
+                if not _allowed_port_name(attr):
+                    cfg.other_attributes[attr] = value
+                    continue
                 line = doc.line_of(elem)
                 ports = list(manifest.ports)
                 raise self._err(doc, elem, f"a port with name [{attr}] is found in the XML (<{elem.tag}>, "
                                            f"line {line}) but not in the providedPorts() of its registered "
                                            f"node type.{suggest(attr, ports) or (' Ports: ' + ', '.join(ports) if ports else ' It has no ports.')}")
-            if port.direction is not PortDirection.OUTPUT:
-                cfg.input_ports[attr] = value
-            if port.direction is not PortDirection.INPUT:
-                cfg.output_ports[attr] = value
-            given.append(attr)
-        return given
+            if entry[0]:
+                inputs[attr] = value
+            if entry[1]:
+                outputs[attr] = value
+            given.append((attr, value, entry))
+        if defaults:
+            self._fill_defaults(cfg, defaults, [attr for attr, _, _ in given] if given else ())
+        for name, raw, (_, _, port, check) in given:
+            if (len(raw) >= 3 and raw[0] == "{" and raw[-1] == "}") or raw == "=" or raw == "{=}":
+                self._port_entry(name, raw, port, bb, doc, elem)  # (a strict blackboard pointer)
+            elif check:
+                checked = (id(port.type), raw)  # the manifests keep every port type alive
+                if checked not in self._literals_ok:
+                    self._check_literal(name, raw, port, cfg.enums, doc, elem)
+                    self._literals_ok.add(checked)
 
     @staticmethod
-    def _fill_defaults(cfg: NodeConfig, manifest: TreeNodeManifest, given: list[str]) -> None:
-        for name, port in manifest.ports.items():
-            if name in given or not port.has_default:
+    def _fill_defaults(cfg: NodeConfig, defaults: tuple, given: Any) -> None:
+        for name, text, to_in, to_out in defaults:
+            if name in given:
                 continue
-            text = port.default_string()
-            if port.direction is not PortDirection.OUTPUT:
+            if to_in:
                 cfg.input_ports[name] = text
-            if port.direction is not PortDirection.INPUT and blackboard_key(text, name) is not None:
+            if to_out:
                 cfg.output_ports[name] = text
 
-    def _check_literals_and_create_entries(self, cfg: NodeConfig, manifest: TreeNodeManifest,
-                                           given: list[str], bb: Blackboard, doc: XMLDocument,
-                                           elem: etree._Element) -> None:
-        for name in given:
-            port = manifest.ports[name]
-            raw = cfg.input_ports.get(name, cfg.output_ports.get(name, ""))
-            ptype = port.type
-            if is_strict_blackboard_pointer(raw) or raw in ("=", "{=}"):
-                key = blackboard_key(raw, name)
-                existing = bb.get_entry(key)
-                if existing is not None:
-                    et = existing.type
-                    if (et.strongly_typed and ptype.strongly_typed and et != ptype
-                            and et.kind != "string"
-                            and not (port.direction is PortDirection.INPUT and polymorphic(et, ptype))):
-                        raise self._err(doc, elem, f"The creation of the tree failed because the port "
-                                                   f"[{name}] was initially created with type [{et.name}] "
-                                                   f"and, later type [{ptype.name}] was used somewhere else.")
-                else:
-                    try:
-                        bb.create_entry(key, ptype)
-                    except BehaviorTreeException as exc:
-                        raise self._err(doc, elem, str(exc)) from None
-            elif ptype.strongly_typed and ptype.has_converter and port.direction is not PortDirection.OUTPUT:
-                checked = (id(ptype), raw)  # the manifests keep every port type alive
-                if checked in self._literals_ok:
-                    continue
-                try:
-                    ptype.from_string(raw, cfg.enums)
-                    self._literals_ok.add(checked)
-                except Exception:  # BT.CPP catches any exception of the converter: LogicError
-                    raise XMLLogicError(f'The port with name "{name}" and value "{raw}" can not be '
-                                        f"converted to {ptype.name}", file=doc.file, line=doc.line_of(elem),
-                                        element=elem.tag) from None
+    def _port_entry(self, name: str, raw: str, port: Any, bb: Blackboard, doc: XMLDocument,
+                    elem: etree._Element) -> None:
+        """Create (or type-check) the blackboard entry a remapped port points to."""
+        ptype = port.type
+        key = blackboard_key(raw, name)
+        existing = bb.get_entry(key)
+        if existing is not None:
+            et = existing.type
+            if (et.strongly_typed and ptype.strongly_typed and et != ptype
+                    and et.kind != "string"
+                    and not (port.direction is PortDirection.INPUT and polymorphic(et, ptype))):
+                raise self._err(doc, elem, f"The creation of the tree failed because the port "
+                                           f"[{name}] was initially created with type [{et.name}] "
+                                           f"and, later type [{ptype.name}] was used somewhere else.")
+        else:
+            try:
+                bb.create_entry(key, ptype)
+            except BehaviorTreeException as exc:
+                raise self._err(doc, elem, str(exc)) from None
+
+    @staticmethod
+    def _check_literal(name: str, raw: str, port: Any, enums: dict[str, int], doc: XMLDocument,
+                       elem: etree._Element) -> None:
+        try:
+            port.type.from_string(raw, enums)
+        except Exception:  # BT.CPP catches any exception of the converter: LogicError
+            raise XMLLogicError(f'The port with name "{name}" and value "{raw}" can not be '
+                                f"converted to {port.type.name}", file=doc.file, line=doc.line_of(elem),
+                                element=elem.tag) from None
 
     # -- subtrees ------------------------------------------------------------------------------
     def _build_substituted_subtree(self, rule: Any, name: str, cfg: NodeConfig, attrs: dict[str, str],
