@@ -1,9 +1,10 @@
 """The tick task: ticks the tree at 100 Hz on absolute deadlines, and never dies.
 
-Deadlines are ``t0 + k * period`` (no drift). In real time the task sleeps to each deadline
-on a loop with microsecond timers (``clock.new_realtime_loop``); with ``pacing: precise`` it
-sleeps to just before the deadline and then yields until it is reached, for the lowest
-lateness at the cost of a busy core share. A tick that raises
+Deadlines are ``t0 + k * period`` (no drift). In real time each deadline is one timer on a
+loop with microsecond timers (``clock.new_realtime_loop``) whose callback ticks the tree
+(``pacing.py``); with ``pacing: precise`` the timer fires just before the deadline and the
+callback yields until it is reached, for the lowest lateness at the cost of a busy core share.
+On a virtual-time loop the task sleeps to each deadline. A tick that raises
 is logged with the node's path; the tree is halted, the gate stops the robot, and ticking
 resumes on the next period. Lateness and tick cost (CPU of the ticking thread, and wall) are
 recorded for ``bench/loop.py`` and the run summary.
@@ -24,6 +25,7 @@ from ..errors import NodeExecutionError
 from ..status import FAILURE, IDLE, SUCCESS, NodeStatus
 from .clock import is_virtual, sleep_until
 from .config import TickConfig
+from .pacing import TimerPacer
 
 if TYPE_CHECKING:
     from ..tree import Tree
@@ -114,6 +116,7 @@ class TickLoop:
         self.on_tick: list[Callable[[NodeStatus], Any]] = []
         self._error_latched = False
         self._last_error_key: tuple | None = None
+        self.pacer: TimerPacer | None = None  # the real-time pacing of the current run
 
     @property
     def period(self) -> float:
@@ -131,31 +134,39 @@ class TickLoop:
         self.tree.set_clock(loop.time)
         self.done = loop.create_future()
         period = self.period
-        spin = self.config.spin_window_s
         t0 = loop.time() if start_at is None else start_at
         k = max(0, int((loop.time() - t0) // period))
         try:
-            while True:
-                k += 1
-                deadline = t0 + k * period
-                await sleep_until(deadline, precise=precise, spin_window=spin)
-                # timers due during the pause fire now; the pause answered their wake-up (and
-                # any other), as BT.CPP's Tree::sleep does, so this tick is not doubled
-                self.tree.timers.fire_due()
-                self.tree.wake_up.check_and_clear()
-                now = loop.time()
-                status = self._tick_once(now - deadline)
-                if self.config.stop_on_completion and (status is SUCCESS or status is FAILURE):
-                    break
-                behind = loop.time() - (t0 + (k + 1) * period)
-                if behind > 0:  # this tick ran past the next deadline: skip the missed ones
-                    missed = int(behind // period) + 1
-                    self.stats.overruns += missed
-                    k += missed
+            if realtime:  # one loop timer per tick (pacing.py)
+                self.pacer = TimerPacer(self, loop, t0, k, precise=precise, spin_window=self.config.spin_window_s)
+                await self.pacer.run()
+            else:
+                await self._run_virtual(loop, t0, k)
         finally:
             if not self.done.done():
                 self.done.set_result(self.status)
         return self.status
+
+    async def _run_virtual(self, loop: asyncio.AbstractEventLoop, t0: float, k: int) -> None:
+        """The task path, kept for virtual-time loops: a run's event order is part of its trace."""
+        period = self.period
+        while True:
+            k += 1
+            deadline = t0 + k * period
+            await sleep_until(deadline)
+            # timers due during the pause fire now; the pause answered their wake-up (and
+            # any other), as BT.CPP's Tree::sleep does, so this tick is not doubled
+            self.tree.timers.fire_due()
+            self.tree.wake_up.check_and_clear()
+            now = loop.time()
+            status = self._tick_once(now - deadline)
+            if self.config.stop_on_completion and (status is SUCCESS or status is FAILURE):
+                return
+            behind = loop.time() - (t0 + (k + 1) * period)
+            if behind > 0:  # this tick ran past the next deadline: skip the missed ones
+                missed = int(behind // period) + 1
+                self.stats.overruns += missed
+                k += missed
 
     def _tick_once(self, lateness: float) -> NodeStatus:
         gate = self.gate

@@ -26,28 +26,87 @@ def test_pacing_is_efficient_by_default_and_validated() -> None:
         TickConfig(pacing="busy")
 
 
-def test_efficient_pacing_never_yields_in_a_busy_loop(monkeypatch) -> None:
-    """With pacing 'efficient' the tick task sleeps straight to each deadline."""
-    calls: list[bool] = []
-    real = clock.sleep_until
-
-    async def spy(deadline, *, precise=False, spin_window=0.0):
-        calls.append(precise)
-        await real(deadline, precise=precise, spin_window=spin_window)
-
+def _run_real_time(xml: str, pacing: str = "efficient", seconds: float = 1.0, **config):
     from bt_runtime import BehaviorTreeFactory
     from bt_runtime.runtime import tick_loop
 
-    monkeypatch.setattr(tick_loop, "sleep_until", spy)
-    tree = BehaviorTreeFactory().create_tree_from_text(
-        '<root BTCPP_format="4"><BehaviorTree ID="M"><Sequence><Sleep msec="30"/></Sequence></BehaviorTree></root>')
+    tree = BehaviorTreeFactory().create_tree_from_text(xml)
+    loop = tick_loop.TickLoop(tree, TickConfig(pacing=pacing, **config), realtime=True)
 
-    async def main(pacing: str):
-        loop = tick_loop.TickLoop(tree, TickConfig(pacing=pacing), realtime=True)
-        await asyncio.wait_for(loop.run(), 1.0)
+    async def main():
+        await asyncio.wait_for(loop.run(), seconds)
 
-    clock.run(main("efficient"), virtual=False)
-    assert calls and not any(calls)
-    calls.clear()
-    clock.run(main("precise"), virtual=False)
-    assert calls and all(calls)
+    clock.run(main, virtual=False)
+    return loop
+
+
+SLEEP_TREE = '<root BTCPP_format="4"><BehaviorTree ID="M"><Sequence><Sleep msec="30"/></Sequence></BehaviorTree></root>'
+
+
+def test_efficient_pacing_never_yields_in_a_busy_loop() -> None:
+    """With pacing 'efficient' each deadline is one timer; 'precise' yields to the loop before it."""
+    efficient = _run_real_time(SLEEP_TREE, "efficient")
+    assert efficient.status.name == "SUCCESS" and efficient.stats.count >= 3
+    assert efficient.pacer.yields == 0
+    precise = _run_real_time(SLEEP_TREE, "precise")
+    assert precise.status.name == "SUCCESS" and precise.pacer.yields > 0
+
+
+def test_real_time_ticks_keep_the_grid_and_skip_deadlines_a_slow_tick_passed() -> None:
+    import time
+
+    from bt_runtime import BehaviorTreeFactory, NodeStatus
+    from bt_runtime.runtime import tick_loop
+
+    stamps: list[float] = []
+
+    def slow(node):
+        stamps.append(1.0)
+        if len(stamps) == 5:
+            time.sleep(0.035)  # runs past three deadlines
+        return NodeStatus.FAILURE if len(stamps) >= 12 else NodeStatus.SUCCESS
+
+    factory = BehaviorTreeFactory()
+    factory.register_simple_condition("Slow", slow)
+    tree = factory.create_tree_from_text('<root BTCPP_format="4"><BehaviorTree ID="M">'
+                                         '<KeepRunningUntilFailure><Slow/></KeepRunningUntilFailure></BehaviorTree></root>')
+    loop = tick_loop.TickLoop(tree, TickConfig(), realtime=True)
+
+    async def main():
+        return await asyncio.wait_for(loop.run(), 2.0)
+
+    assert clock.run(main, virtual=False) is NodeStatus.FAILURE
+    assert loop.stats.count == 12 and loop.stats.overruns >= 3  # 3, or more if descheduled meanwhile
+    assert all(late >= -1e-6 for late in loop.stats.lateness[:12])  # never early
+
+
+def test_cancelling_the_tick_task_from_inside_a_tick_stops_the_ticking() -> None:
+    """A node that restarts the tree cancels the running tick task from within a tick: no tick
+    follows in that run, and the task ends cancelled."""
+    from bt_runtime import BehaviorTreeFactory, NodeStatus
+    from bt_runtime.runtime import tick_loop
+
+    ticks: list[int] = []
+    holder: dict[str, asyncio.Task] = {}
+
+    def cancel_self(node):
+        ticks.append(1)
+        if len(ticks) == 3:
+            holder["task"].cancel()
+        return NodeStatus.SUCCESS
+
+    factory = BehaviorTreeFactory()
+    factory.register_simple_condition("CancelSelf", cancel_self)
+    tree = factory.create_tree_from_text('<root BTCPP_format="4"><BehaviorTree ID="M">'
+                                         '<KeepRunningUntilFailure><CancelSelf/></KeepRunningUntilFailure></BehaviorTree></root>')
+    loop = tick_loop.TickLoop(tree, TickConfig(), realtime=True)
+
+    async def main():
+        holder["task"] = task = asyncio.get_running_loop().create_task(loop.run())
+        with pytest.raises(asyncio.CancelledError):
+            await task
+        await asyncio.sleep(0.05)  # five more periods: nothing ticks
+        return task.cancelled()
+
+    assert clock.run(main, virtual=False)
+    assert len(ticks) == 3 and loop.done.done()
