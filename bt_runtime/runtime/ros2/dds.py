@@ -11,8 +11,11 @@
   has matched the reply reader of the client that wrote the request.
 
 Threading: Cyclone calls the listeners on its own receive threads. A listener only takes the
-samples (deserialising them), stamps them with the loop clock and hands them to the event loop
-with ``loop.call_soon_threadsafe``; everything else (user callbacks, futures) runs on the loop.
+samples (deserialising them with ``cdr.py``'s compiled decoders, several times faster than
+Cyclone's own), stamps them with the loop clock and puts them in the node's inbox; the first
+sample into an empty inbox wakes the loop (``loop.call_soon_threadsafe``), which delivers
+everything that arrived meanwhile in one pass, in arrival order. Everything else (user
+callbacks, futures) runs on the loop.
 The loop never blocks on DDS: writes are non-blocking for best-effort topics and bounded by
 ``max_blocking_time`` for reliable ones (which only blocks when a reader's history is full).
 """
@@ -24,12 +27,13 @@ import contextlib
 import itertools
 import os
 import uuid as uuidlib
+from collections import deque
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
 
 import structlog
-from cyclonedds.core import Listener, Policy, Qos
+from cyclonedds.core import DDSException, InstanceState, Listener, Policy, Qos, SampleState, ViewState
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.internal import InvalidSample
 from cyclonedds.pub import DataWriter
@@ -37,7 +41,12 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
-from . import idl
+from . import cdr, idl
+
+try:  # what DataReader.take() calls, without its per-field deserialisation (cdr.py does that)
+    from cyclonedds._clayer import ddspy_take
+except ImportError:  # another binding version: fall back to DataReader.take()
+    ddspy_take = None
 
 log = structlog.get_logger("bt_runtime.ros2.dds")
 
@@ -123,6 +132,30 @@ class DdsNode:
         self._writers: list[DataWriter] = []
         self._uid = uuidlib.uuid4().bytes
         self.closed = False
+        self._inbox: deque[tuple[Reader, list, float]] = deque()  # filled by receive threads
+        self._wake_pending = False
+        self.wakeups = 0  # passes of the loop that delivered the inbox
+
+    def post(self, reader: Reader, samples: list, now: float) -> None:
+        """From a receive thread: queue ``samples`` for the loop; wake it unless a wake-up is
+        pending already (that one delivers these too). Raises RuntimeError if the loop is closed."""
+        self._inbox.append((reader, samples, now))
+        if not self._wake_pending:
+            self._wake_pending = True
+            try:
+                self.loop.call_soon_threadsafe(self._deliver_inbox)
+            except RuntimeError:
+                self._wake_pending = False
+                raise
+
+    def _deliver_inbox(self) -> None:  # on the loop
+        # clear the flag first: a sample posted from now on either is delivered below or wakes us again
+        self._wake_pending = False
+        self.wakeups += 1
+        inbox = self._inbox
+        for _ in range(len(inbox)):  # what is there now; later arrivals have their own wake-up
+            reader, samples, now = inbox.popleft()
+            reader._deliver(samples, now)
 
     # -- plumbing ------------------------------------------------------------------------------
     def topic(self, dds_name: str, data_type: type) -> Topic:
@@ -174,6 +207,8 @@ class DdsNode:
 
 
 _MAX_TAKE_FAILURES = 64  # consecutive failed takes in one callback before it gives up
+_TAKE_BATCH = 32
+_ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
 
 
 class Reader:
@@ -193,6 +228,7 @@ class Reader:
         self.closed = False
         loop = node.loop
         self._loop = loop
+        self._decode = cdr.decoder(data_type)
         self._listener = Listener(on_data_available=self._on_data_available)
         self.reader = DataReader(node.participant, node.topic(dds_name, data_type),
                                  qos=qos.to_dds(user_data=user_data), listener=self._listener)
@@ -203,7 +239,7 @@ class Reader:
         failures = 0
         while not self.closed:
             try:
-                samples = reader.take(N=32)
+                taken, samples = self._take(reader)
             except Exception:  # a sample that does not deserialise: drop it, count it
                 self.malformed += 1
                 failures += 1
@@ -212,16 +248,33 @@ class Reader:
                     # or the participant's deletion (which waits for this callback) never ends
                     return
                 continue
-            if not samples:
+            if not taken:
                 return
-            now = self._loop.time()
-            valid = [s for s in samples if not isinstance(s, InvalidSample)]
-            if valid:
+            if samples:
                 try:
-                    self._loop.call_soon_threadsafe(self._deliver, valid, now)
+                    self.node.post(self, samples, self._loop.time())
                 except RuntimeError:  # the loop is closed
                     self.closed = True
                     return
+
+    def _take(self, reader: DataReader) -> tuple[int, list]:
+        """(samples taken, the valid ones decoded); a sample that does not decode is counted in
+        ``malformed`` and dropped alone."""
+        if ddspy_take is None:
+            samples = reader.take(N=_TAKE_BATCH)
+            return len(samples), [s for s in samples if not isinstance(s, InvalidSample)]
+        taken = ddspy_take(reader._ref, _ANY_STATE, _TAKE_BATCH)
+        if type(taken) is int:
+            raise DDSException(taken, f"Occurred while taking data in {self.name}")
+        decode = self._decode
+        valid = []
+        for data, info in taken:
+            if info.valid_data:  # (invalid samples only tell of a disposed instance)
+                try:
+                    valid.append(decode(data))
+                except Exception:
+                    self.malformed += 1
+        return len(taken), valid
 
     def _deliver(self, samples: list, now: float) -> None:  # on the loop
         if self.closed:
