@@ -117,16 +117,17 @@ class TreeRegistry:
     def load_text(self, text: str | bytes, file: str | None = None) -> LoadResult:
         with long_lived():  # a document's elements and plans live as long as the registry
             doc = parse_xml_text(text, file=file)
-            return self._load(doc, [], self._include_roots(doc))
+            return self._load(doc, [], doc)
 
     def load_file(self, path: str | Path) -> LoadResult:
         with long_lived():
             doc = read_xml_file(path)
-            return self._load(doc, [str(Path(path).resolve())], self._include_roots(doc))
+            return self._load(doc, [str(Path(path).resolve())], doc)
 
     def _include_roots(self, top: XMLDocument) -> tuple[Path, ...]:
         """Where includes of a document loaded by the user may lead: below its folder (the
-        working directory for text) or below a registered search path."""
+        working directory for text) or below a registered search path. (Asked only when there
+        is an include: resolving paths costs file-system calls.)"""
         return (top.directory.resolve(), *(p.resolve() for p in self.include_search_paths))
 
     def clear(self) -> None:
@@ -140,7 +141,9 @@ class TreeRegistry:
         return XMLLoadError(message, file=doc.file, line=doc.line_of(elem) if elem is not None else None,
                             element=elem.tag if elem is not None else None)
 
-    def _load(self, doc: XMLDocument, include_stack: list[str], roots: tuple[Path, ...]) -> LoadResult:
+    def _load(self, doc: XMLDocument, include_stack: list[str], top: XMLDocument) -> LoadResult:
+        """Register the trees of ``doc``; ``top`` is the document the user loaded (whose folder
+        bounds where includes may lead)."""
         root = doc.root
         if root.tag != "root":
             raise self._err(doc, root, "The XML must have a root node called <root>")
@@ -158,7 +161,7 @@ class TreeRegistry:
         # Includes first, recursively (their trees are registered in the same registry).
         for child in children:
             if child.tag == "include":
-                self._load_include(doc, child, include_stack, roots)
+                self._load_include(doc, child, include_stack, top)
 
         models = [c for c in children if c.tag == "TreeNodesModel"]
         if len(models) > 1:
@@ -200,7 +203,7 @@ class TreeRegistry:
         return LoadResult(new_ids, ids, main_tree, doc)
 
     def _load_include(self, doc: XMLDocument, elem: etree._Element, include_stack: list[str],
-                      roots: tuple[Path, ...]) -> None:
+                      top: XMLDocument) -> None:
         """Load an included file: its path is relative to the including file (as in BT.CPP) and
         must stay below the top-level file's folder or a registered search path, so an included
         file in a child folder may include ``../x.xml`` but nothing outside."""
@@ -211,6 +214,7 @@ class TreeRegistry:
             raise self._err(doc, elem, "<include ros_pkg=...> needs ROS package lookup, which bt_runtime "
                                        "does not do; use a path relative to this file")
         target = (doc.directory.resolve() / path_attr).resolve()
+        roots = self._include_roots(top)
         if not any(root == target or root in target.parents for root in roots):
             allowed = ", ".join(str(root) for root in roots)
             raise self._err(doc, elem, f"include path '{path_attr}' resolves outside the folder of the "
@@ -220,7 +224,7 @@ class TreeRegistry:
         if not target.is_file():
             raise self._err(doc, elem, f"included file not found: {target}")
         included = read_xml_file(target)
-        self._load(included, [*include_stack, str(target)], roots)
+        self._load(included, [*include_stack, str(target)], top)
 
     def _load_models(self, doc: XMLDocument, models: etree._Element) -> None:
         for entry in element_children(models):
