@@ -109,7 +109,10 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
 
     def __init__(self, name: str, config: NodeConfig):
         self._script = None  # see _bare_tick
-        super().__init__(name, config)
+        if type(self) in _PLAIN_INIT:  # super().__init__ is TreeNode's: called without super()'s cost
+            TreeNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
         self._init_script()
         self._use_script_tick()
 
@@ -136,7 +139,10 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
 
     def __init__(self, name: str, config: NodeConfig):
         self._script = None  # see _bare_tick
-        super().__init__(name, config)
+        if type(self) in _PLAIN_INIT:  # (as ScriptNode)
+            TreeNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
         self._init_script()
         self._use_script_tick()
 
@@ -148,6 +154,15 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
 
     def _script_tick(self, script: Script) -> Callable[[TreeNode], NodeStatus]:
         return script.condition_tick()
+
+
+def _next_init(cls: type) -> object:
+    return next(k.__dict__["__init__"] for k in cls.__mro__[1:] if "__init__" in k.__dict__)
+
+
+# The script node classes whose super().__init__ is TreeNode.__init__ (checked, not assumed:
+# a base that gains a constructor is then called through super() again).
+_PLAIN_INIT = frozenset(cls for cls in (ScriptNode, ScriptConditionNode) if _next_init(cls) is TreeNode.__init__)
 
 
 class SetBlackboardNode(SyncActionNode):
