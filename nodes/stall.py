@@ -31,6 +31,12 @@ LATERAL_MARGIN = 0.25  # m/s^2 around v * w (turn estimate from odometry speed a
 ODOM_MAX_AGE = 0.25  # s: an older odometry twist explains nothing
 
 
+def _seen(buffer, since: float) -> bool:
+    """Nothing in ``buffer`` is stamped after ``since`` (the samples a call would skip)."""
+    last = buffer.latest_stamped() if buffer is not None else None
+    return last is None or last[0] <= since
+
+
 class MotionMismatch:
     """Reads the new IMU and odometry samples from the data backup on each call and remembers
     the latest contact it implies: (time, bearing in the robot frame, kind)."""
@@ -64,8 +70,10 @@ class MotionMismatch:
             self._skip(buffers)
             return self._recent(context, window)
         odom = buffers.get("odom")
-        odoms = [o for o in odom.since_stamped(self._odom_since) if o[0] > self._odom_since] if odom is not None else []
         imu = buffers.get("imu")
+        if _seen(imu, self._imu_since) and _seen(odom, self._odom_since):
+            return self._recent(context, window)  # no sample since the last call (IMU ~50 Hz, ticks 100 Hz)
+        odoms = [o for o in odom.since_stamped(self._odom_since) if o[0] > self._odom_since] if odom is not None else []
         imus = imu.since_stamped(self._imu_since) if imu is not None else []
         a_max = float(getattr(context.robot, "max_linear_accel", 1.0)) * FORWARD_SLACK + FORWARD_MARGIN
         k = 0
