@@ -5,8 +5,17 @@ last error (Nav2 error code and message), so a summary can say why a goal was no
     ...
     why.reason(since=t_goal_sent)              # 'navigation: GOAL_OUTSIDE_MAP (204) ...'
 
-It watches from the outside: a status observer on the tree and a transparent proxy around the
-driver's navigation client. Nothing in the tree changes behaviour because it is watched.
+It watches from the outside: a status observer on some of the tree's nodes and a transparent
+proxy around the driver's navigation client. Nothing in the tree changes behaviour because it is
+watched.
+
+A leaf's FAILURE is reported once the SubTree holding it fails too (an inverted condition failing
+is business as usual; a planning failure that fails the PathPlanning subtree is a cause): more
+exactly, when a node whose path is a prefix of leaf paths (``mission/path_planning`` of
+``mission/path_planning/ComputePathToPose::77``, a SubTree node) fails, the latest of the last
+20 leaf failures under it is the failing node. Only those nodes and the leaves under them are
+observed, and only for FAILURE: an observed node's status stores and reads cost more on every
+tick, and the other nodes' failures could never be reported.
 """
 
 from __future__ import annotations
@@ -17,10 +26,11 @@ import contextlib
 from dataclasses import dataclass
 from typing import Any
 
-from ..status import NodeStatus
+from ..status import FAILURE, NodeStatus
 from .messages import ActionStatus, NavErrorCode, NavResult
 
 _KEEP = 50
+_LEAF_WINDOW = 20  # a leaf failure older than the last 20 explains no later failure
 
 
 @dataclass(frozen=True, slots=True)
@@ -108,15 +118,23 @@ class FailureWitness:
         self.runtime = runtime
         self.node_failures: collections.deque[NodeFailure] = collections.deque(maxlen=_KEEP)
         self.nav_errors: collections.deque[NavError] = collections.deque(maxlen=_KEEP)
-        self._leaf_failures: collections.deque[tuple[float, str, str]] = collections.deque(maxlen=20)
+        # leaf -> (path, type, paths of the nodes holding it); holding node -> its path
+        self._leaves: dict[Any, tuple[str, str, list[str]]] = {}
+        self._holders: dict[Any, str] = {}
+        self._leaf_count = 0  # leaf failures seen; only the last _LEAF_WINDOW of them are causes
+        self._latest: dict[str, tuple[int, float, str, str]] = {}  # holder path -> its latest leaf failure
         self._nav: WatchedNavigation | None = None
         self._task: asyncio.Task | None = None
+        self._unobserve = None
 
     @classmethod
     def attach(cls, runtime: Any) -> FailureWitness:
         """Watch ``runtime`` (its tree must be loaded; call before ``runtime.start()``)."""
         self = cls(runtime)
-        runtime.tree.add_status_observer(self._on_status, failures_only=True)  # all it reads
+        tree = runtime.tree
+        self._index(tree.nodes())
+        self._unobserve = tree.add_status_observer(self._on_status, failures_only=True,
+                                                   nodes=[*self._leaves, *self._holders])
         driver = runtime.driver
         if getattr(driver, "navigation", None) is not None:
             self._nav = WatchedNavigation(driver.navigation, runtime.clock, self.nav_errors)
@@ -124,9 +142,30 @@ class FailureWitness:
         self._task = runtime.loop.create_task(self._poll(), name="failure-witness")
         return self
 
+    def _index(self, nodes) -> None:
+        """Find the holding nodes (paths that prefix a leaf's path) and the leaves under them."""
+        nodes = list(nodes)
+        by_path: dict[str, list[Any]] = {}
+        for node in nodes:
+            if node.children_nodes():
+                by_path.setdefault(node.full_path, []).append(node)
+        for node in nodes:
+            if node.children_nodes():
+                continue
+            path = node.full_path
+            holders = [path[:i] for i, c in enumerate(path) if c == "/" and path[:i] in by_path]
+            if holders:
+                self._leaves[node] = (path, node.registration_name, holders)
+                for holder in holders:
+                    for held in by_path[holder]:
+                        self._holders[held] = holder
+
     def detach(self) -> None:
         if self._task is not None:
             self._task.cancel()
+        if self._unobserve is not None:
+            self._unobserve()  # the tree's cells go back to plain stores
+            self._unobserve = None
 
     async def _poll(self) -> None:
         while True:
@@ -135,21 +174,25 @@ class FailureWitness:
                 self._nav.poll()
 
     def _on_status(self, _stamp: float, node: Any, _previous: NodeStatus, new: NodeStatus) -> None:
-        """A leaf's FAILURE counts once it fails its parent too (an inverted condition failing
-        is business as usual); as it climbs, the same leaf stays the cause."""
-        if new is not NodeStatus.FAILURE:
+        """A leaf's FAILURE is remembered under each node holding it; it counts once one of
+        them fails too, and as it climbs, the same leaf stays the cause."""
+        if new is not FAILURE:
             return
-        path = node.full_path
-        if not list(node.children_nodes()):
-            self._leaf_failures.append((self.runtime.clock(), path, node.registration_name))
+        leaf = self._leaves.get(node)
+        if leaf is not None:
+            self._leaf_count += 1
+            seen = (self._leaf_count, self.runtime.clock(), leaf[0], leaf[1])
+            latest = self._latest
+            for holder in leaf[2]:
+                latest[holder] = seen
             return
-        prefix = path + "/"
-        for t, leaf_path, leaf_type in reversed(self._leaf_failures):
-            if leaf_path.startswith(prefix):
-                last = self.node_failures[-1] if self.node_failures else None
-                if last is None or (last.path, last.t) != (leaf_path, t):
-                    self.node_failures.append(NodeFailure(t, leaf_path, leaf_type))
-                return
+        seen = self._latest.get(self._holders[node])
+        if seen is None or seen[0] <= self._leaf_count - _LEAF_WINDOW:
+            return
+        _, t, leaf_path, leaf_type = seen
+        last = self.node_failures[-1] if self.node_failures else None
+        if last is None or (last.path, last.t) != (leaf_path, t):
+            self.node_failures.append(NodeFailure(t, leaf_path, leaf_type))
 
     # -- queries ---------------------------------------------------------------------------------
     def last_node_failure(self, since: float = float("-inf")) -> NodeFailure | None:
