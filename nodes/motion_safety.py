@@ -29,35 +29,54 @@ def free_distances(scan: LaserScan, half_width: float, radius: float) -> tuple[f
     touches a scan point (inf if none). Points in the side margin (up to ``half_width`` from
     the axis) count once they lie beyond the body's front/back; one already beside the body
     does not (the body passes it without touching), so a robot pushed against a wall can still
-    drive along it or away from it."""
+    drive along it or away from it.
+
+    Only the few beams whose point lies within the corridor (finite, ``|r sin| <=`` the wider
+    of the two widths) are looked at one by one; numpy would spend more in a dozen calls on so
+    few values than the arithmetic costs."""
     r = np.asarray(scan.ranges, dtype=float)
-    cos, sin = _beam_directions(scan.angle_min, scan.angle_increment, len(r))
-    ok = np.isfinite(r)
-    x = r[ok] * cos[ok]
-    y = np.abs(r[ok] * sin[ok])
-    body = y <= radius
-    # travel until the body's circle reaches the point; the margin band from the front/back on
-    reach = np.where(body, np.sqrt(np.maximum(radius * radius - y * y, 0.0)), radius)
-    counted = body | ((y <= half_width) & (np.abs(x) >= radius))
-    fwd = (x - reach)[counted & (x > 0)]
-    back = (-x - reach)[counted & (x < 0)]
-    ahead = float(fwd.min()) if len(fwd) else math.inf
-    behind = float(back.min()) if len(back) else math.inf
+    cos_sin, side, axial = _beam_directions(scan.angle_min, scan.angle_increment, len(r))
+    widest = max(half_width, radius)
+    near = np.flatnonzero(np.abs(r) * side <= widest)  # |r sin| <= widest; never a NaN or inf range
+    if widest < _AXIAL_REACH and len(axial):  # (a body narrower than 1e-15 m: axial beams explicitly)
+        near = np.union1d(near, axial[np.isfinite(r[axial])])
+    ahead = behind = math.inf
+    rr = radius * radius
+    for x, y in (r[near, None] * cos_sin[near]).tolist():  # (r cos, r sin) of each
+        y = abs(y)
+        if y <= radius:  # in the body's path: travel until the circle reaches it
+            room = rr - y * y
+            reach = math.sqrt(room) if room > 0.0 else 0.0
+        elif y <= half_width and abs(x) >= radius:  # in the margin band, beyond the front/back
+            reach = radius
+        else:
+            continue
+        if x > 0.0:
+            ahead = min(ahead, x - reach)
+        elif x < 0.0:
+            behind = min(behind, -x - reach)
     return max(ahead, 0.0), max(behind, 0.0)
 
 
-_DIRECTIONS: dict[tuple[float, float, int], tuple[np.ndarray, np.ndarray]] = {}
+_DIRECTIONS: dict[tuple[float, float, int], tuple[np.ndarray, ...]] = {}
+# |sin| of an axial beam (sin 0) is taken as the smallest double, so an inf range stays inf
+# (inf * 0 would be NaN, with numpy's warning); a finite range times it is at most:
+_TINY = float(np.nextafter(0.0, 1.0))
+_AXIAL_REACH = np.finfo(float).max * _TINY
 
 
-def _beam_directions(angle_min: float, increment: float, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """cos and sin of every beam's angle, computed once per scan geometry (a lidar keeps one)."""
+def _beam_directions(angle_min: float, increment: float, n: int) -> tuple[np.ndarray, ...]:
+    """(cos, sin) pairs, |sin| (never 0) of every beam's angle and the indices of the axial
+    beams, computed once per scan geometry (a lidar keeps one)."""
     key = (angle_min, increment, n)
     found = _DIRECTIONS.get(key)
     if found is None:
         if len(_DIRECTIONS) > 8:
             _DIRECTIONS.clear()
         angles = angle_min + increment * np.arange(n)
-        found = _DIRECTIONS[key] = (np.cos(angles), np.sin(angles))
+        sin = np.sin(angles)
+        found = _DIRECTIONS[key] = (np.column_stack((np.cos(angles), sin)), np.maximum(np.abs(sin), _TINY),
+                                    np.flatnonzero(sin == 0.0))
     return found
 
 

@@ -132,6 +132,23 @@ def test_a_wall_beside_the_body_does_not_stop_it_but_one_ahead_in_the_margin_doe
     assert ahead == pytest.approx(0.5 - math.sqrt(0.2**2 - 0.1**2), abs=0.01)  # where the circle meets it
 
 
+@pytest.mark.filterwarnings("error")  # no numpy warning for inf or NaN ranges on any beam
+def test_free_distance_reads_a_beam_straight_ahead_and_ignores_missing_ranges():
+    """The ROSbot's lidar starts at angle 0: its first beam has sin exactly 0, and it may read
+    inf (nothing hit) or NaN (an invalid reading); neither is an obstacle."""
+    n, inc = 400, 2 * math.pi / 400
+    ranges = np.full(n, np.inf)
+    ranges[n // 2] = 0.5  # straight behind
+    ranges[[3, 7]] = np.nan
+    ahead, behind = free_distances(LaserScan(0.0, 0.0, inc, 0.12, 3.5, ranges), 0.2, 0.15)
+    assert ahead == math.inf and behind == pytest.approx(0.35)
+    ranges[0] = 0.6  # straight ahead
+    ahead, behind = free_distances(LaserScan(0.0, 0.0, inc, 0.12, 3.5, ranges), 0.2, 0.15)
+    assert ahead == pytest.approx(0.45) and behind == pytest.approx(0.35)
+    ranges[0] = np.nan
+    assert free_distances(LaserScan(0.0, 0.0, inc, 0.12, 3.5, ranges), 0.2, 0.15)[0] == math.inf
+
+
 def test_allowed_speed_stops_short_of_the_obstacle():
     assert allowed_speed(0.05, 0.5, 0.2, 0.05) == 0.0
     for free in (0.1, 0.3, 1.0):
