@@ -24,6 +24,8 @@ class IfThenElseNode(ControlNode):
     """condition, then-branch, optional else-branch; the condition is not re-checked while
     a branch runs."""
 
+    __slots__ = ("_child_idx",)  # (hot state in slots: no per-node __dict__ to touch)
+
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._child_idx = 0
         super().__init__(name, config)
@@ -215,8 +217,8 @@ def switch_case_matches(a: str, b: str, enums: dict[str, int]) -> bool:
 class SwitchNode(ControlNode):
     """Tick the child whose ``case_i`` equals ``variable``; the last child is the default."""
 
+    __slots__ = ("_running_child", "_cases")
     num_cases = 2
-    _cases: tuple[str | None, ...] | None = None  # the case values, once known to be literals
 
     @classmethod
     def provided_ports(cls):
@@ -226,6 +228,7 @@ class SwitchNode(ControlNode):
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._running_child = -1
+        self._cases: tuple[str | None, ...] | None = None  # the case values, once known to be literals
         super().__init__(name, config)
 
     def _case_values(self) -> tuple[str | None, ...] | None:

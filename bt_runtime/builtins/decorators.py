@@ -137,8 +137,8 @@ class _CountingDecorator(DecoratorNode):
     """Repeat and RetryUntilSuccessful: a decorator with an int port read every tick, unless
     it is a literal (or its default), which cannot change: then it is read once."""
 
+    __slots__ = ("_limit",)  # the port's value, once known to be constant (else None)
     _bare_tick_ok = True  # tick() resets a completed child itself
-    _limit: int | None = None  # the port's value, once known to be constant
     _port = ""
     _missing = ""
 
@@ -155,6 +155,7 @@ class _CountingDecorator(DecoratorNode):
 class RepeatNode(_CountingDecorator):
     """Repeat a successful child ``num_cycles`` times (-1: forever)."""
 
+    __slots__ = ("_count",)
     _port = "num_cycles"
     _missing = "Missing parameter [num_cycles] in RepeatNode"
 
@@ -165,6 +166,7 @@ class RepeatNode(_CountingDecorator):
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._count = 0
+        self._limit = None
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:
@@ -222,6 +224,7 @@ class RepeatNode(_CountingDecorator):
 class RetryNode(_CountingDecorator):
     """Retry a failing child up to ``num_attempts`` times (-1: forever)."""
 
+    __slots__ = ("_tries",)
     _port = "num_attempts"
     _missing = "Missing parameter [num_attempts] in RetryNode"
 
@@ -232,6 +235,7 @@ class RetryNode(_CountingDecorator):
 
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._tries = 0
+        self._limit = None
         super().__init__(name, config)
 
     def tick(self) -> NodeStatus:

@@ -21,10 +21,8 @@ class ParallelNode(ControlNode):
     """Tick all children each tick; SUCCESS when ``success_count`` succeeded, FAILURE when
     ``failure_count`` failed (negative values count from the number of children)."""
 
+    __slots__ = ("_completed", "_successes", "_failures", "_limits")  # no per-node __dict__
     description = "Tick every child; succeed/fail by thresholds"
-    # (number of children, success_count, effective success, effective failure) once both
-    # ports are known to be constant and the thresholds were checked for that many children
-    _limits: tuple[int, int, int, int] | None = None
 
     @classmethod
     def provided_ports(cls):
@@ -37,6 +35,9 @@ class ParallelNode(ControlNode):
         self._completed: set[int] = set()
         self._successes = 0
         self._failures = 0
+        # (number of children, success_count, effective success, effective failure) once both
+        # ports are known to be constant and the thresholds were checked for that many children
+        self._limits: tuple[int, int, int, int] | None = None
         super().__init__(name, config)
 
     def _clear(self) -> None:
@@ -130,9 +131,8 @@ class ParallelNode(ControlNode):
 class ParallelAllNode(ControlNode):
     """Run every child to completion; FAILURE if at least ``max_failures`` failed."""
 
+    __slots__ = ("_completed", "_failures", "_limits")
     description = "Tick every child until all complete"
-    # (number of children, effective threshold) once the port is known to be constant
-    _limits: tuple[int, int] | None = None
 
     @classmethod
     def provided_ports(cls):
@@ -143,6 +143,7 @@ class ParallelAllNode(ControlNode):
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._completed: set[int] = set()
         self._failures = 0
+        self._limits: tuple[int, int] | None = None  # (children, effective threshold) if constant
         super().__init__(name, config)
 
     def _read_limits(self, n: int) -> tuple[int, int]:

@@ -312,6 +312,8 @@ class SequenceWithMemoryNode(ControlNode):
     """Like Sequence, but a FAILURE keeps the index (resume at the failed child), it always
     yields after a synchronous success, and halting does not reset the index."""
 
+    __slots__ = ("_idx", "_skipped")
+
     def __init__(self, name: str, config: NodeConfig | None = None):
         self._idx = 0
         self._skipped = 0
