@@ -153,8 +153,18 @@ class Tree:
         return self._tick_root(_ONCE, 0.0, max_reticks)
 
     def tick_exactly_once(self) -> NodeStatus:
-        """Tick the root exactly once, ignoring wake-up signals."""
-        return self._tick_root(_EXACTLY_ONCE, 0.0)
+        """Tick the root exactly once, ignoring wake-up signals (``_tick_root`` with one pass
+        of its loop: the root's tick, then a completed root reset to IDLE)."""
+        subtrees = self.subtrees
+        if not subtrees or not subtrees[0].nodes:
+            raise BTRuntimeError("Empty Tree")
+        cell = subtrees[0].nodes[0]._cell  # root_node, inlined
+        if self.timers._heap:
+            self.timers.fire_due()
+        status = tick_cell(cell)
+        if status is SUCCESS or status is FAILURE:
+            cell.status = IDLE  # root.reset_status()
+        return status
 
     def tick_while_running(self, sleep: float = 0.01) -> NodeStatus:
         """Tick until the root is no longer RUNNING, sleeping ``sleep`` s between ticks
@@ -162,7 +172,10 @@ class Tree:
         return self._tick_root(_WHILE_RUNNING, sleep)
 
     def _tick_root(self, mode: int, sleep: float, max_reticks: int | None = None) -> NodeStatus:
-        cell = self.root_node._cell  # root.execute_tick() is tick_cell(cell) (node.py)
+        subtrees = self.subtrees
+        if not subtrees or not subtrees[0].nodes:
+            raise BTRuntimeError("Empty Tree")
+        cell = subtrees[0].nodes[0]._cell  # root_node._cell; root.execute_tick() is tick_cell(cell)
         timers = self.timers
         wake_up = self.wake_up
         status = IDLE
