@@ -81,8 +81,20 @@ def _has_converter(entry: Entry) -> bool:
     return declared.has_converter and declared.kind not in ("enum", "status")
 
 
-def _store(key: str, entry: Entry, value: Any, enums: dict[str, int] | None) -> Any:
-    """The ``:=`` / ``=`` rules once the entry exists and the value is known."""
+def _source_type_name(value: Any, bb: Blackboard | None, source: str | None) -> str:
+    """The type BT.CPP names for the right operand: a variable's value keeps its original C++
+    type (a host ``bool`` or ``int`` entry), any other value is what the evaluator made."""
+    if bb is not None and source is not None:
+        entry = bb.get_entry(source)
+        if entry is not None and entry.type.strongly_typed:
+            return entry.type.name
+    return type_name(value)
+
+
+def _store(key: str, entry: Entry, value: Any, enums: dict[str, int] | None,
+           bb: Blackboard | None = None, source: str | None = None) -> Any:
+    """The ``:=`` / ``=`` rules once the entry exists and the value is known; ``source`` is the
+    variable the value was read from, if the right side is a bare name (for the error text)."""
     dst = normalize(entry.value)
     if dst is EMPTY and entry.type.kind == "anytype":
         new = value
@@ -101,7 +113,8 @@ def _store(key: str, entry: Entry, value: Any, enums: dict[str, int] | None) -> 
         except CastError:
             tn = _dst_type_name(entry)
             raise BTRuntimeError(f"Error assigning a value to entry [{key}] with type [{tn}]. "
-                                 f"\nThe right operand has type [{type_name(value)}] and can't be "
+                                 f"\nThe right operand has type [{_source_type_name(value, bb, source)}] "
+                                 "and can't be "
                                  f"converted to [{tn}]") from None
     entry.write(new)
     return normalize(new)
@@ -148,8 +161,9 @@ def _fast_int(result: float, entry: Entry) -> int | None:
     return None
 
 
-def make_assign(op: str, key: str, value_fn):
-    """A closure ``(bb, enums) -> stored value`` for ``key op <value_fn>``.
+def make_assign(op: str, key: str, value_fn, source: str | None = None):
+    """A closure ``(bb, enums) -> stored value`` for ``key op <value_fn>``; ``source`` names the
+    variable when the right side is a bare name (only an error text uses it).
 
     The closures inline the frequent cases (a double or int64 counter, a value of the entry's
     own kind); anything else goes through ``_store``/``_update``, which hold the full rules.
@@ -182,7 +196,7 @@ def make_assign(op: str, key: str, value_fn):
                 if new is not None:
                     entry.write(new)
                     return new
-            return _store(key, entry, value, enums)
+            return _store(key, entry, value, enums, bb, source)
         return assign
 
     arith = {"+=": operator.add, "-=": operator.sub, "*=": operator.mul, "/=": ieee_div}[op]

@@ -312,7 +312,8 @@ def compile_node(node: Node, names: dict[str, str] | None = None) -> Fn:
 
 def _general_assign(op: str, key: str, value: Node, names: dict[str, str]) -> Fn:
     """The general closure of ``key op value`` (a shortcut makes it only if it needs it)."""
-    return make_assign(op, key, _emit(value, names))
+    source = names.get(value.name, value.name) if isinstance(value, Name) else None
+    return make_assign(op, key, _emit(value, names), source)
 
 
 def _emit(node: Node, names: dict[str, str]) -> Fn:

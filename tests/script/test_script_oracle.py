@@ -137,6 +137,9 @@ PRESETS = [
     ("a = 'z'; r := a", {"a": "str"}), ("a += 'z'; r := a", {"a": "str"}), ("r := a", {"a": "5"}),
     ("r := a + 1", {"a": "5"}), ("r := a < 6", {"a": "5"}), ("a = 'x'; r := a", {"a": "str"}),
     ("r := a * 2", {"a": 21}), ("r := a / 4", {"a": 1.0}),
+    # the error names a variable's own C++ type (a host bool or int), not the evaluator's
+    ("r := 'x'; r := a", {"a": True}), ("r := 'x'; r := a", {"a": 3}), ("r := 'x'; r = a", {"a": 3}),
+    ("r := 'x'; r := a + 0", {"a": True}),
 ]
 
 
