@@ -25,9 +25,9 @@ from .harness import Case, tree
 STATUSES = ["SUCCESS", "FAILURE", "RUNNING"]
 
 # Root entries written by the host before the first tick (and between ticks).
-SETUP = {"i": 1, "d": 0.5, "s": "abc", "n": "5", "c": 0, "sw": "abc"}
+SETUP = {"h": 0, "i": 1, "d": 0.5, "s": "abc", "n": "5", "c": 0, "sw": "abc", "b": True}  # h first: always set
 KEYS = {"i": "int", "d": "double", "s": "string", "n": "string", "c": "int", "sw": "string",
-        "w": "string", "p": "string"}
+        "w": "string", "p": "string", "b": "int", "h": "int"}
 
 _NUM_LITERALS = ["0", "1", "2", "3", "0.5", "2.0", "1e1", "0x10", "(0 - 1)", "(1/0)", "(0/0)"]
 _STR_LITERALS = ["'abc'", "'5'", "'2.5'", "''", "'x'", "'1'", "'SUCCESS'"]
@@ -53,8 +53,8 @@ class _Gen:
     # expressions are well typed and a tree runs for several ticks; one in ten is drawn over
     # any kinds, which exercises the conversion and error rules.
     def var(self, scope: dict[str, str], kind: str | None = None) -> str:
-        names = [k for k, v in scope.items() if v == kind or (kind is None and v != "sw")]
-        return self.r.choice(names or [k for k, v in scope.items() if v != "sw"])
+        names = [k for k, v in scope.items() if v == kind or (kind is None and v in ("num", "str"))]
+        return self.r.choice(names or [k for k, v in scope.items() if v in ("num", "str")])
 
     def expr(self, scope: dict[str, str], depth: int, kind: str | None = None) -> str:
         r = self.r
@@ -115,7 +115,12 @@ class _Gen:
             attrs.append(f'{which}="{self.expr(scope, 2, "num")}"')
         if r.random() < 0.15:
             which = r.choice(["_onSuccess", "_onFailure", "_post", "_onHalted"])
-            attrs.append(f'{which}="{self.script(scope)}"')
+            if which != "_onHalted":
+                attrs.append(f'{which}="{self.script(scope)}"')
+            elif "h" in scope:
+                # a script that cannot throw: BT.CPP's Tree destructor runs _onHalted (even after a
+                # failed build), and an exception there aborts the process
+                attrs.append(f'_onHalted="h := {r.randint(1, 99)}"')
         return (" " + " ".join(attrs)) if attrs else ""
 
     # -- nodes ---------------------------------------------------------------------------------
@@ -152,7 +157,7 @@ class _Gen:
         else:
             # the subtree sees two ports, p and q, and its own private entry k
             q_src = self.var(scope)
-            inner = {"p": "str", "q": scope[q_src], "k": "num"}
+            inner = {"p": "str", "q": scope[q_src], "k": "num", "h": "h"}
             if "sw" in scope and r.random() < 0.3:  # a port the Switch nodes inside may read
                 remap_sw = ' t="{sw}"'
                 inner["t"] = "sw"
@@ -166,7 +171,8 @@ class _Gen:
                 remap = f' p="{{{p_src}}}" q="{{{q_src}}}"'
                 inner["p"] = scope[p_src]
         self.subtrees[sub_id] = self.node(inner, depth + 1)
-        return f'<SubTree ID="{sub_id}" name="{name}"{remap}{remap_sw}{cond}/>'
+        remap_h = ' h="{h}"' if style != "autoremap" else ""
+        return f'<SubTree ID="{sub_id}" name="{name}"{remap}{remap_sw}{remap_h}{cond}/>'
 
     def node(self, scope: dict[str, str], depth: int) -> str:
         r = self.r
@@ -202,8 +208,13 @@ class _Gen:
             return f"<{ctl}{cond}>{kids(1, 3)}</{ctl}>"
 
         dec = r.choice(["Inverter", "ForceSuccess", "ForceFailure", "KeepRunningUntilFailure", "Repeat",
-                        "RetryUntilSuccessful", "RunOnce", "Precondition"])
+                        "RetryUntilSuccessful", "RunOnce", "Precondition", "Loop"])
         child = self.node(scope, depth + 1)
+        if dec == "Loop":  # an output port written through whatever the scope remaps
+            kind, items = r.choice([("Int", ["1", "2", "-3"]), ("Double", ["0.5", "2", "1e1"]),
+                                    ("String", ["a", "5", "x y"])])
+            queue = ";".join(r.sample(items, r.randint(0, 3)))
+            return f'<Loop{kind} queue="{queue}" value="{{{self.var(scope)}}}"{cond}>{child}</Loop{kind}>'
         if dec == "Repeat":
             cycles = r.choice(["-2", "0", "1", "2", "{c}" if scope.get("c") == "num" else "2"])
             return f'<Repeat num_cycles="{cycles}"{cond}>{child}</Repeat>'
@@ -223,6 +234,7 @@ def make_case(seed: int) -> Case:
     r = g.r
     kinds = {k: "str" if isinstance(v, str) else "num" for k, v in SETUP.items()}
     kinds["sw"] = "sw"  # read by Switch only, written by the host only
+    kinds["h"] = "h"  # which _onHalted ran last
     body = g.node(kinds, 0)
     extra = "".join(f'<BehaviorTree ID="{k}">{v}</BehaviorTree>' for k, v in g.subtrees.items())
     ticks = r.randint(1, 7)
