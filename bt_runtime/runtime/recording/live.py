@@ -38,14 +38,20 @@ class FoxgloveLive:
     def url(self) -> str:
         return f"ws://{self.host}:{self.port}"
 
-    def sent(self, topic: str, t_ns: int, data: bytes) -> None:
-        """Called after each logged message: keeps latched ones, tells clients the robot time."""
-        if topic in self.channels.latched:
-            with self._lock:
-                self._latched[topic] = (self.channels.channels[topic], t_ns, data)
-        if t_ns > self._last_time_ns + 50_000_000:  # 20 Hz at most
-            self._last_time_ns = t_ns
-            self.server.broadcast_time(t_ns)
+    def sent(self, messages: list[tuple[str, bytes, int]]) -> None:
+        """Called after each batch of logged ``(topic, data, log time)``: keeps the latched
+        ones, tells clients the robot time."""
+        latched = self.channels.latched
+        newest = self._last_time_ns
+        for topic, data, t_ns in messages:
+            if topic in latched:
+                with self._lock:
+                    self._latched[topic] = (self.channels.channels[topic], t_ns, data)
+            if t_ns > newest:
+                newest = t_ns
+        if newest > self._last_time_ns + 50_000_000:  # 20 Hz at most
+            self._last_time_ns = newest
+            self.server.broadcast_time(newest)
 
     def close(self) -> None:
         self.server.stop()

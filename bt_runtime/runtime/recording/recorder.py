@@ -49,6 +49,9 @@ class Recorder:
         self._task: asyncio.Task | None = None
         self._drain_task: asyncio.Task | None = None
         self.tree_log: Any = None  # tree_log.TreeStateLog or TreeTransitionLog
+        # live view only ('states'): the tree's statuses sampled at the viewing rate, not after every tick
+        self._tree_period = 0.0
+        self._tree_next = -1e18
         self._last_output: tuple[Any, str] | None = None
         self._last_output_t = -1e18
         self._switches_seen = 0
@@ -86,6 +89,9 @@ class Recorder:
             rt.supervisor.add_listener(self._on_supervisor_event)
         if rt.tree is not None and topics.behavior_tree_log:
             self.tree_log = tree_log(self.options.tree_log, rt.tree, clock, self._put_tree_log)
+            opts = self.options
+            if getattr(self.pipeline, "bag", None) is None and opts.live_rate_hz > 0 and opts.tree_log == "states":
+                self._tree_period = 1.0 / opts.live_rate_hz  # a pass over every node costs ~5-8 us a tick
             if rt.tick_loop is not None:
                 rt.tick_loop.on_tick.append(self._on_tick)
         if topics.tf_static:
@@ -188,6 +194,11 @@ class Recorder:
         if self.pipeline.tick_guard is None and self.runtime.realtime:
             rt = self.runtime  # the loop's clock is time.monotonic in real time
             self.pipeline.tick_guard = (rt.clock(), 1.0 / rt.config.tick.rate_hz)
+        if self._tree_period:
+            now = self.clock()
+            if now < self._tree_next:
+                return
+            self._tree_next = now + self._tree_period
         self.tree_log.after_tick()
 
     def _put_tree_log(self, events: list[tuple[float, Any, Any, Any]]) -> None:

@@ -138,27 +138,30 @@ def test_every_topic_is_advertised_before_its_first_message(virtual):
     assert advertised == expected
 
 
-def test_live_view_sends_high_rate_streams_at_the_viewing_rate_and_the_bag_keeps_all(tmp_path):
-    """50 Hz odometry for 2 robot seconds: the bag gets all 100 (and their /tf), a subscribed
-    live client gets 10 Hz (live_rate_hz), commands unthrottled; nothing is sent to a topic
-    nobody subscribed to."""
+@pytest.mark.parametrize("with_bag", [True, False])
+def test_live_view_sends_high_rate_streams_at_the_viewing_rate_and_the_bag_keeps_all(tmp_path, with_bag):
+    """50 Hz odometry and commands for 2 robot seconds: the bag gets all 100 (and their /tf), a
+    subscribed live client gets 10 Hz (live_rate_hz) and then, once the period has passed with
+    nothing newer, the latest message of each (a stream that stops shows its last value);
+    nothing is sent to a topic nobody subscribed to."""
     import threading
 
     from websockets.sync.client import connect
 
-    from bt_runtime.runtime.messages import Odometry, Pose2D, Twist
+    from bt_runtime.runtime.messages import Imu, Odometry, Pose2D, Twist
     from bt_runtime.runtime.recording.bag import Rosbag2Bag
     from bt_runtime.runtime.recording.channels import ChannelSet
     from bt_runtime.runtime.recording.live import FoxgloveLive
     from bt_runtime.runtime.recording.pipeline import RecordPipeline
 
-    bag = Rosbag2Bag(tmp_path / "bag", ChannelSet())
+    bag = Rosbag2Bag(tmp_path / "bag", ChannelSet()) if with_bag else None  # without: held items converted late
     live = FoxgloveLive(ChannelSet(), port=0)
     pipeline = RecordPipeline(bag=bag, live=live, live_rate_hz=10.0)
     for topic, typename in {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
                             "/cmd_vel": "geometry_msgs/msg/Twist", "/imu": "sensor_msgs/msg/Imu"}.items():
         pipeline._write_one("advertise", topic, 0.0, typename)
     got: dict[str, int] = {}
+    last_ns: dict[str, int] = {}
     done = threading.Event()
     try:
         with connect(live.url, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]) as ws:
@@ -185,8 +188,10 @@ def test_live_view_sends_high_rate_streams_at_the_viewing_rate_and_the_bag_keeps
                     except TimeoutError:
                         continue
                     if isinstance(frame, bytes) and frame[0] == 0x01:
-                        topic = subs[struct.unpack_from("<I", frame, 1)[0]]
+                        sub_id, log_ns = struct.unpack_from("<IQ", frame, 1)
+                        topic = subs[sub_id]
                         got[topic] = got.get(topic, 0) + 1
+                        last_ns[topic] = log_ns
 
             reader = threading.Thread(target=receive)
             reader.start()
@@ -194,14 +199,25 @@ def test_live_view_sends_high_rate_streams_at_the_viewing_rate_and_the_bag_keeps
                 t = 0.02 * k
                 pipeline._write_one("odom", "/odom", t, Odometry(t, Pose2D(0.01 * k, 0.0, 0.0), Twist(0.5, 0.0)))
                 pipeline._write_one("command", "/cmd_vel", t, Twist(0.5, 0.0))
+            pipeline.flush_live()  # as each drain ends
             deadline = time.monotonic() + 20
-            while (got.get("/odom", 0) < 20 or got.get("/cmd_vel", 0) < 100) and time.monotonic() < deadline:
+            while (got.get("/odom", 0) < 20 or got.get("/cmd_vel", 0) < 20) and time.monotonic() < deadline:
                 time.sleep(0.05)
             time.sleep(0.3)  # anything more would have arrived by now
+            sent = dict(got)
+            pipeline.flush_live()  # the period since the last send has not passed: nothing more yet
+            pipeline._write_one("imu", "/imu", 2.1, Imu(2.1, 0.0, 0.0, 0.0))  # robot time moves on
+            pipeline.flush_live()
+            while (got.get("/odom", 0) < 21 or got.get("/cmd_vel", 0) < 21) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            time.sleep(0.3)
             done.set()
             reader.join()
     finally:
         pipeline.stop()
     assert pipeline.errors == 0
-    assert bag.message_counts() == {"/odom": 100, "/tf": 100, "/cmd_vel": 100}
-    assert got == {"/odom": 20, "/cmd_vel": 100}  # /tf: nobody subscribed
+    if with_bag:
+        assert bag.message_counts() == {"/odom": 100, "/tf": 100, "/cmd_vel": 100, "/imu": 1}
+    assert sent == {"/odom": 20, "/cmd_vel": 20}  # /tf, /imu: nobody subscribed
+    assert got == {"/odom": 21, "/cmd_vel": 21}
+    assert last_ns == {"/odom": 1_980_000_000, "/cmd_vel": 1_980_000_000}  # the streams' last messages
