@@ -58,10 +58,20 @@ class RecordPipeline:
         # each sink's channels (a separate foxglove context each, so the live view can skip what the bag keeps)
         self.sinks: list[ChannelSet] = [x.channels for x in (bag, live) if x is not None]
         period_ns = int(round(1e9 / live_rate_hz)) if live_rate_hz > 0 else 0
-        self.live_period_ns = dict.fromkeys(VIEWING_RATE_KINDS, period_ns) if period_ns else {}
+        # the viewing rate: with a bag, applied by the writer to the converted messages (ns of robot
+        # time); live view only, applied by ``put`` (loop seconds), so the writer never sees the rest
+        live_only = bag is None and live is not None
+        self.live_period_ns = dict.fromkeys(VIEWING_RATE_KINDS, period_ns) if period_ns and not live_only else {}
+        self.live_period_s = (dict.fromkeys(VIEWING_RATE_KINDS, 1.0 / live_rate_hz)
+                              if period_ns and live_only else {})
+        self._put_next: dict[tuple[str, str], float] = {}
+        self._put_now = -1e18  # the latest loop time put saw (live view only)
+        if self.live_period_s:
+            self.put = self._put_viewing  # type: ignore[method-assign]
         self._live_next: dict[tuple[str, str], int] = {}  # (kind, topic) -> earliest log time of the next live send
         self._live_now = 0  # the latest log time seen (robot time, ns)
-        # (kind, topic) -> the latest item the viewing rate held back (live only: the item; with a bag: its bytes)
+        # (kind, topic) -> the latest message the viewing rate held back (live only: the queued item; with a
+        # bag: its outputs' bytes)
         self._held: dict[tuple[str, str], Any] = {}
         self._outbox: list[tuple[str, bytes, int]] = []  # (topic, data, log time) for the live view, sent in batches
         self.state = state or ConvertState()
@@ -84,6 +94,28 @@ class RecordPipeline:
 
     # -- the loop's side ---------------------------------------------------------------------------
     def put(self, kind: str, topic: str, t: float, payload: Any) -> None:
+        queue = self.queue
+        if len(queue) >= self.queue_size:
+            self.dropped[topic] = self.dropped.get(topic, 0) + 1
+            return
+        queue.append((kind, topic, t, payload))
+
+    def _put_viewing(self, kind: str, topic: str, t: float, payload: Any) -> None:
+        """``put`` of a live view without a bag: a message of a continuous stream within the
+        viewing period of the last one queued is held back (the latest only, sent by the writer
+        when the period passes with nothing newer) instead of queued. Cheaper than queueing it:
+        the writer's handling of an item costs several times this check."""
+        period = self.live_period_s.get(kind)
+        if period is not None:
+            if t > self._put_now:
+                self._put_now = t
+            key = (kind, topic)
+            nxt = self._put_next
+            if t < nxt.get(key, -1e18):
+                self._held[key] = (kind, topic, t, payload)
+                return
+            nxt[key] = t + period - 1e-6  # a microsecond's slack: 0.1 + 0.2 > 0.3 in floats
+            self._held.pop(key, None)
         queue = self.queue
         if len(queue) >= self.queue_size:
             self.dropped[topic] = self.dropped.get(topic, 0) + 1
@@ -187,7 +219,7 @@ class RecordPipeline:
                 return
             t_ns = max(0, int(round(self.state.robot(t) * 1e9)))  # log time: robot time
             due = True  # the live view may have this item's outputs (the viewing rate says no to most)
-            if live is not None and not held:
+            if self.live_period_ns and not held:  # with a bag (live only: put applied the rate)
                 if t_ns > self._live_now:
                     self._live_now = t_ns
                 period = self.live_period_ns.get(kind)
@@ -199,9 +231,7 @@ class RecordPipeline:
                         self._live_next[key] = t_ns + period
                         self._held.pop(key, None)
             if bag is None:  # live view only: convert nothing a client will not get
-                if not due or not self._wanted(kind, topic):
-                    if not due:  # the latest of its stream: sent if nothing newer comes within the period
-                        self._held[(kind, topic)] = (kind, topic, t, payload)
+                if not self._wanted(kind, topic):
                     if kind == "odom":
                         self.state.odom_pose = (payload.pose.x, payload.pose.y, payload.pose.yaw)  # for map -> odom
                     return
@@ -237,13 +267,20 @@ class RecordPipeline:
         held = self._held
         if not held:
             return
+        if self.live_period_s:  # live only: items held by put (loop seconds), converted now
+            now_s, nxt_s = self._put_now, self._put_next
+            for key in list(held):  # the loop may add to it meanwhile (real time)
+                if nxt_s.get(key, 0.0) > now_s:
+                    continue
+                item = held.pop(key, None)
+                if item is not None:
+                    nxt_s[key] = now_s + self.live_period_s[key[0]]
+                    self._write_one(*item, held=True)
+            return
         now, nxt = self._live_now, self._live_next
         for key in [k for k in held if nxt[k] <= now]:
             value = held.pop(key)
             nxt[key] = now + self.live_period_ns[key[0]]
-            if type(value) is tuple:  # live view only: converted now
-                self._write_one(*value, held=True)
-                continue
             self._outbox.extend(m for m in value if self._live_wants(m[0]))
 
     def flush_live(self) -> None:

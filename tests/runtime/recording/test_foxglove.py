@@ -197,17 +197,17 @@ def test_live_view_sends_high_rate_streams_at_the_viewing_rate_and_the_bag_keeps
             reader.start()
             for k in range(100):
                 t = 0.02 * k
-                pipeline._write_one("odom", "/odom", t, Odometry(t, Pose2D(0.01 * k, 0.0, 0.0), Twist(0.5, 0.0)))
-                pipeline._write_one("command", "/cmd_vel", t, Twist(0.5, 0.0))
-            pipeline.flush_live()  # as each drain ends
+                pipeline.put("odom", "/odom", t, Odometry(t, Pose2D(0.01 * k, 0.0, 0.0), Twist(0.5, 0.0)))
+                pipeline.put("command", "/cmd_vel", t, Twist(0.5, 0.0))
+            pipeline.drain()
             deadline = time.monotonic() + 20
             while (got.get("/odom", 0) < 20 or got.get("/cmd_vel", 0) < 20) and time.monotonic() < deadline:
                 time.sleep(0.05)
             time.sleep(0.3)  # anything more would have arrived by now
             sent = dict(got)
-            pipeline.flush_live()  # the period since the last send has not passed: nothing more yet
-            pipeline._write_one("imu", "/imu", 2.1, Imu(2.1, 0.0, 0.0, 0.0))  # robot time moves on
-            pipeline.flush_live()
+            pipeline.drain()  # the period since the last send has not passed: nothing more yet
+            pipeline.put("imu", "/imu", 2.1, Imu(2.1, 0.0, 0.0, 0.0))  # robot time moves on
+            pipeline.drain()
             while (got.get("/odom", 0) < 21 or got.get("/cmd_vel", 0) < 21) and time.monotonic() < deadline:
                 time.sleep(0.05)
             time.sleep(0.3)
