@@ -303,9 +303,11 @@ class TreeNode:
         if config._pre or config._post:
             self._select_execute_tick()
         else:  # _select_execute_tick() without hooks, inlined: this runs once per node built
-            execute_tick = type(self).execute_tick
-            bare = self._bare_tick_ok and execute_tick in _LIBRARY_EXECUTE_TICKS
-            cell.fast = self._bare_tick() if bare else execute_tick
+            cls = type(self)
+            bare = _bare_by_class.get(cls)
+            if bare is None:  # (once per class: both are class attributes)
+                bare = _bare_by_class[cls] = bool(cls._bare_tick_ok and cls.execute_tick in _LIBRARY_EXECUTE_TICKS)
+            cell.fast = self._bare_tick() if bare else cls.execute_tick
 
     # -- declaration ---------------------------------------------------------------------------
     @classmethod
@@ -1089,6 +1091,8 @@ class DecoratorNode(TreeNode):
 # through it; the library's own overrides are known to be equivalent to the bare tick where
 # the class sets _bare_tick_ok.
 _LIBRARY_EXECUTE_TICKS = (TreeNode.execute_tick, SyncActionNode.execute_tick, DecoratorNode.execute_tick)
+# class -> whether its nodes without conditions or hooks take the bare tick (TreeNode.__init__)
+_bare_by_class: dict[type, bool] = {}
 
 
 class SimpleDecoratorNode(DecoratorNode):

@@ -272,8 +272,10 @@ class TreeRegistry:
         manifests = self.factory.manifests
         tag = elem.tag
         children = elem[:] if len(elem) else ()  # element_children(elem), inlined: most are leaves
-        if children:
-            children = [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
+        for child in children:  # (a loop in this frame: a comprehension costs a frame and a list)
+            if type(child) is not ELEMENT:  # a comment, PI or entity among them: filter (rare)
+                children = [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
+                break
         items = elem.items()  # one lxml call for every attribute (elem.get costs as much)
         if items:
             items = tuple(items)
