@@ -2,7 +2,8 @@
 
 Their ports are read every tick, as BT.CPP reads them, unless they are literals (or take their
 defaults), which cannot change: then the thresholds are worked out once per number of children.
-The children are ticked through their cells (``tick_cell`` inlined: one frame per child).
+The children are ticked through their cells (``tick_cell`` inlined: one frame per child); the
+children already completed are a bit mask in a slot (bit i: child i), not a set per node.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ class ParallelNode(ControlNode):
                            "number of children that need to fail to trigger a FAILURE")]
 
     def __init__(self, name: str, config: NodeConfig | None = None):
-        self._completed: set[int] = set()
+        self._completed = 0  # bit mask of the children that completed
         self._successes = 0
         self._failures = 0
         # (number of children, success_count, effective success, effective failure) once both
@@ -41,7 +42,7 @@ class ParallelNode(ControlNode):
         super().__init__(name, config)
 
     def _clear(self) -> None:
-        self._completed.clear()
+        self._completed = 0
         self._successes = 0
         self._failures = 0
 
@@ -75,10 +76,11 @@ class ParallelNode(ControlNode):
         self._cell.status = RUNNING  # set_status(RUNNING)
         skipped = 0
         completed = self._completed
-        i = -1
+        successes = self._successes
+        failures = self._failures
+        bit = 1
         for child in cells:
-            i += 1
-            if i not in completed:
+            if not completed & bit:
                 # -- status = tick_cell(child) (child.execute_tick()), inlined for speed ----------
                 fast = child.fast
                 try:
@@ -90,29 +92,31 @@ class ParallelNode(ControlNode):
                         raise
                     raise _wrap_error(child, exc) from exc
                 # ---------------------------------------------------------------------------------
+                # (the state is stored as it changes: a later child's error leaves it as BT.CPP does)
                 if status is SUCCESS:
                     child.status = status
-                    completed.add(i)
-                    self._successes += 1
+                    self._completed = completed = completed | bit
+                    self._successes = successes = successes + 1
                 elif status is FAILURE:
                     child.status = status
-                    completed.add(i)
-                    self._failures += 1
+                    self._completed = completed = completed | bit
+                    self._failures = failures = failures + 1
                 elif status is SKIPPED:
                     skipped += 1
                 else:
                     if status is IDLE:
                         child.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
                     child.status = status
-            if self._successes >= s_eff or (s_raw < 0 and self._successes + skipped >= s_eff):
+            if successes >= s_eff or (s_raw < 0 and successes + skipped >= s_eff):
                 result = SUCCESS
                 break
-            if (n - self._failures) < s_eff or self._failures == f_eff:
+            if (n - failures) < s_eff or failures == f_eff:
                 result = FAILURE
                 break
+            bit <<= 1
         else:
             return SKIPPED if skipped == n else RUNNING
-        completed.clear()  # _clear(), inlined
+        self._completed = 0  # _clear(), inlined
         self._successes = 0
         self._failures = 0
         for cell in cells:  # reset_children(), inlined for speed
@@ -141,7 +145,7 @@ class ParallelAllNode(ControlNode):
                            "ParallelAll returns FAILURE")]
 
     def __init__(self, name: str, config: NodeConfig | None = None):
-        self._completed: set[int] = set()
+        self._completed = 0  # bit mask of the children that completed
         self._failures = 0
         self._limits: tuple[int, int] | None = None  # (children, effective threshold) if constant
         super().__init__(name, config)
@@ -169,10 +173,10 @@ class ParallelAllNode(ControlNode):
         self._cell.status = RUNNING  # set_status(RUNNING)
         skipped = 0
         completed = self._completed
-        i = -1
+        bit = 1
         for child in cells:
-            i += 1
-            if i in completed:
+            if completed & bit:
+                bit <<= 1
                 continue
             # -- status = tick_cell(child) (child.execute_tick()), inlined for speed --------------
             fast = child.fast
@@ -187,10 +191,10 @@ class ParallelAllNode(ControlNode):
             # -------------------------------------------------------------------------------------
             if status is SUCCESS:
                 child.status = status
-                completed.add(i)
+                self._completed = completed = completed | bit
             elif status is FAILURE:
                 child.status = status
-                completed.add(i)
+                self._completed = completed = completed | bit
                 self._failures += 1
             elif status is SKIPPED:
                 skipped += 1
@@ -198,22 +202,23 @@ class ParallelAllNode(ControlNode):
                 if status is IDLE:
                     child.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
                 child.status = status
+            bit <<= 1
         if skipped == n:
             return SKIPPED
-        if skipped + len(completed) >= n:
+        if skipped + completed.bit_count() >= n:
             for cell in cells:  # reset_children(), inlined for speed
                 status = cell.status
                 if status is not IDLE:
                     if status is RUNNING:
                         cell.node.halt_node()
                     cell.status = IDLE  # notifies if observed
-            completed.clear()
+            self._completed = 0
             result = FAILURE if self._failures >= threshold else SUCCESS
             self._failures = 0
             return result
         return RUNNING
 
     def halt(self) -> None:
-        self._completed.clear()
+        self._completed = 0
         self._failures = 0
         ControlNode.halt(self)
