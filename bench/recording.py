@@ -30,6 +30,7 @@ Run: python bench/recording.py [--duration 40] [--rounds 3] [--realtime-seconds 
 from __future__ import annotations
 
 import argparse
+import asyncio
 import json
 import resource
 import statistics
@@ -99,63 +100,70 @@ def client(url: str) -> None:
 IN_PROCESS = ("baseline", "record", "foxglove", "foxglove+client")
 
 
-def inprocess(duration: float, rounds: int, configs: tuple[str, ...] = IN_PROCESS) -> None:
-    """The run phase alone, in this process: CPU of all threads (process_time) from the recording's
-    start to its stop, so the interpreter's start-up and imports are left out."""
-    import asyncio
+async def run_phase(config: str, folder: Path, duration: float) -> dict:
+    """One run of the autonomy tree to yard_east in this process (virtual or real time: the
+    caller's loop); the recording's start to its stop is measured: CPU of all threads, the tick
+    lateness, the recording's report."""
     import os
-    import shutil
 
     from bt_runtime.cli.registration import registrations
-    from bt_runtime.logging_setup import quiet_logging
     from bt_runtime.runtime.app import AutonomyRuntime
-    from bt_runtime.runtime.clock import run as run_loop
     from bt_runtime.runtime.messages import Pose2D
     from bt_runtime.runtime.recording.cli import Recording
     from sim.driver import SimDriver
     from sim.recording import recording_hooks
 
-    quiet_logging("error")
     regs = registrations(argparse.Namespace(register=[], no_nodes=False))
+    driver = SimDriver("apartment", "burger", seed=0)
+    rt = AutonomyRuntime(driver, register=regs)
+    rt.load_tree(ROOT / "trees" / "autonomy.xml")
+    g = driver.sim.world.goal("yard_east")
+    bb = rt.tree.root_blackboard
+    bb.set("goal", Pose2D(g.x, g.y, 0.0))
+    bb.set("goal_status", "PENDING")
+    rec = {"baseline": None, "record": Recording(bag=folder)}.get(config, Recording(foxglove_port=0))
+    viewer = None
+    c0 = time.process_time()
+    if rec is not None:
+        rec.start(rt, recording_hooks(driver))
+    if config == "foxglove+client":
+        viewer = subprocess.Popen([sys.executable, __file__, "--client", rec.live.url], stdout=subprocess.PIPE,
+                                  text=True)
+        if not viewer.stdout.readline().startswith("ready"):
+            raise RuntimeError("the Foxglove client did not subscribe")
+    await rt.start()
+    await asyncio.sleep(duration)
+    await rt.stop()
+    report = rec.stop() if rec is not None else {}
+    cpu = time.process_time() - c0
+    if viewer is not None:
+        viewer.wait(30)
+    stats = rt.tick_loop.stats
+    late = stats._window(stats.lateness)
+    return {"cpu": cpu, "report": report, "lateness": late.copy(), "load": os.getloadavg()[0]}
 
-    async def one(config: str, folder: Path) -> tuple[float, int]:
-        driver = SimDriver("apartment", "burger", seed=0)
-        rt = AutonomyRuntime(driver, register=regs)
-        rt.load_tree(ROOT / "trees" / "autonomy.xml")
-        g = driver.sim.world.goal("yard_east")
-        bb = rt.tree.root_blackboard
-        bb.set("goal", Pose2D(g.x, g.y, 0.0))
-        bb.set("goal_status", "PENDING")
-        rec = {"baseline": None, "record": Recording(bag=folder)}.get(config, Recording(foxglove_port=0))
-        viewer = None
-        c0 = time.process_time()
-        if rec is not None:
-            rec.start(rt, recording_hooks(driver))
-        if config == "foxglove+client":
-            viewer = subprocess.Popen([sys.executable, __file__, "--client", rec.live.url], stdout=subprocess.PIPE,
-                                      text=True)
-            if not viewer.stdout.readline().startswith("ready"):
-                raise RuntimeError("the Foxglove client did not subscribe")
-        await rt.start()
-        await asyncio.sleep(duration)
-        await rt.stop()
-        report = rec.stop() if rec is not None else {}
-        cpu = time.process_time() - c0
-        if viewer is not None:
-            viewer.wait(30)
-        return cpu, report.get("message_count", 0)
 
+def inprocess(duration: float, rounds: int, configs: tuple[str, ...] = IN_PROCESS) -> None:
+    """The run phase alone, in this process: CPU of all threads (process_time) from the recording's
+    start to its stop, so the interpreter's start-up and imports are left out."""
+    import os
+    import shutil
+
+    from bt_runtime.logging_setup import quiet_logging
+    from bt_runtime.runtime.clock import run as run_loop
+
+    quiet_logging("error")
     rows: dict[str, list[float]] = {name: [] for name in configs}
     messages: dict[str, int] = {}
     load0 = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
-        run_loop(one("record", Path(tmp) / "warm"), virtual=True)  # imports and serializer code generation
+        run_loop(run_phase("record", Path(tmp) / "warm", duration), virtual=True)  # imports, serializer code
         for r in range(rounds):
             for name in configs:
                 folder = Path(tmp) / f"{name}{r}"
-                cpu, msgs = run_loop(one(name, folder), virtual=True)
-                rows[name].append(cpu)
-                messages[name] = max(messages.get(name, 0), msgs)
+                out = run_loop(run_phase(name, folder, duration), virtual=True)
+                rows[name].append(out["cpu"])
+                messages[name] = max(messages.get(name, 0), out["report"].get("message_count", 0))
                 shutil.rmtree(folder, ignore_errors=True)
     load1 = os.getloadavg()
     print(f"\nrun phase only (in process, {duration:g} s robot time, {rounds} interleaved rounds; load average "
@@ -171,6 +179,44 @@ def inprocess(duration: float, rounds: int, configs: tuple[str, ...] = IN_PROCES
               f"ms  {rel}  {messages[name]} messages")
 
 
+def realtime_inprocess(seconds: float, pairs: int) -> None:
+    """Tick lateness in real time with and without --record, interleaved (the order alternates
+    each pair): p50, p99 and max of every run, the ticks later than 5 ms, and the recording's
+    longest segment-close step and drops."""
+    import shutil
+
+    import numpy as np
+
+    from bt_runtime.logging_setup import quiet_logging
+    from bt_runtime.runtime.clock import run as run_loop
+
+    quiet_logging("error")
+    rows: dict[str, list[dict]] = {"baseline": [], "record": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        run_loop(run_phase("record", Path(tmp) / "warm", 1.0), virtual=True)
+        for r in range(pairs):
+            for name in (("baseline", "record") if r % 2 == 0 else ("record", "baseline")):
+                folder = Path(tmp) / f"{name}{r}"
+                out = run_loop(run_phase(name, folder, seconds), virtual=False)
+                late = out["lateness"] * 1e3
+                rep = out["report"]
+                row = {"p50": float(np.percentile(late, 50)), "p99": float(np.percentile(late, 99)),
+                       "max": float(late.max()), "over5": int((late > 5.0).sum()), "ticks": len(late),
+                       "load": out["load"], "dropped": sum((rep.get("dropped") or {}).values()),
+                       "flush_ms": rep.get("max_flush_step_ms", 0.0), "messages": rep.get("message_count", 0)}
+                rows[name].append(row)
+                print(f"  pair {r + 1} {name:<9} p50 {row['p50']:6.3f} ms  p99 {row['p99']:6.2f} ms  max "
+                      f"{row['max']:6.1f} ms  >5 ms {row['over5']:3d}/{row['ticks']}  load {row['load']:5.1f}"
+                      + (f"  {row['messages']} messages, dropped {row['dropped']}, longest close step "
+                         f"{row['flush_ms']:.2f} ms" if name == "record" else ""), flush=True)
+                shutil.rmtree(folder, ignore_errors=True)
+    print(f"\nreal time, {seconds:g} s runs, {pairs} pairs (in process): median (min..max) over runs, ms")
+    for name, got in rows.items():
+        cells = "  ".join(f"{k} {statistics.median(x[k] for x in got):.3f} ({min(x[k] for x in got):.3f}.."
+                          f"{max(x[k] for x in got):.3f})" for k in ("p50", "p99", "max"))
+        print(f"  {name:<9} {cells}  >5 ms {sum(x['over5'] for x in got)}/{sum(x['ticks'] for x in got)}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--duration", type=float, default=40.0, help="robot seconds per run (virtual time)")
@@ -179,6 +225,9 @@ def main() -> None:
     ap.add_argument("--realtime-seconds", type=float, default=15.0, help="0: skip the real-time part")
     ap.add_argument("--inprocess", action="store_true", help="also measure the run phase alone, in process")
     ap.add_argument("--skip-processes", action="store_true", help="only the in-process part")
+    ap.add_argument("--realtime-pairs", type=int, default=0, metavar="N",
+                    help="also N interleaved in-process real-time pairs (no recording, --record) of "
+                         "--realtime-seconds each: tick lateness p50/p99/max")
     ap.add_argument("--client", metavar="URL", help=argparse.SUPPRESS)  # the subscribing viewer's process
     args = ap.parse_args()
     if args.client:
@@ -186,6 +235,8 @@ def main() -> None:
         return
     if args.inprocess:
         inprocess(args.duration, args.rounds)
+    if args.realtime_pairs:
+        realtime_inprocess(args.realtime_seconds, args.realtime_pairs)
     if args.skip_processes:
         return
     import os

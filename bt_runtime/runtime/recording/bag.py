@@ -20,6 +20,11 @@ from typing import Any
 from .channels import ChannelSet, dump_yaml, offered_qos
 from .types import type_hash
 
+# uncompressed bytes per MCAP chunk: a chunk is compressed and written inside the log call that
+# fills it, holding the GIL (~1 ms for lz4 at this size); smaller than the SDK's default so that
+# pause stays short in a real-time run
+CHUNK_SIZE = 256 * 1024
+
 
 class Rosbag2Bag:
     """Not thread-safe: the writer thread owns it."""
@@ -60,7 +65,8 @@ class Rosbag2Bag:
         self._seg_path = self.path / f"{self.path.name}_{len(self.files)}.mcap"
         self._writer = foxglove.open_mcap(self._seg_path, context=self.channels.context,
                                           writer_options=MCAPWriteOptions(profile="ros2", compression=compression,
-                                                                          compression_threads=0))
+                                                                          compression_threads=0,
+                                                                          chunk_size=CHUNK_SIZE))
         self._seg_counts = {}
         self._seg_start, self._seg_end = 2**63 - 1, 0
 
@@ -75,14 +81,21 @@ class Rosbag2Bag:
 
     def flush(self) -> None:
         """Close the open segment and list it in metadata.yaml."""
+        if self.close_segment():
+            self.write_metadata()
+
+    def close_segment(self) -> bool:
+        """Close the open segment (its MCAP summary and footer); True when metadata.yaml must be
+        rewritten to list it (``write_metadata``: a separate step, so a writer in real time can
+        fit each between two ticks)."""
         writer, self._writer = self._writer, None
         if writer is None:
-            return
+            return False
         writer.close()
         n = sum(self._seg_counts.values())
         if n == 0:
             self._seg_path.unlink(missing_ok=True)
-            return
+            return False
         self.files.append({"path": self._seg_path.name,
                            "starting_time": {"nanoseconds_since_epoch": self._seg_start},
                            "duration": {"nanoseconds": self._seg_end - self._seg_start},
@@ -91,7 +104,7 @@ class Rosbag2Bag:
             self.counts[topic] = self.counts.get(topic, 0) + k
         self.start_ns = self._seg_start if self.start_ns is None else min(self.start_ns, self._seg_start)
         self.end_ns = max(self.end_ns, self._seg_end)
-        self.write_metadata()
+        return True
 
     def close(self) -> None:
         if self.closed:

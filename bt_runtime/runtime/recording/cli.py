@@ -140,7 +140,8 @@ class Recording:
                        "foxglove": self.live.url if self.live is not None else None,
                        "messages": counts, "message_count": sum(counts.values()),
                        "dropped": dict(pipeline.dropped), "errors": pipeline.errors,
-                       "max_queued": pipeline.max_queued, "writer_cpu_s": round(pipeline.cpu_s, 3)}
+                       "max_queued": pipeline.max_queued, "writer_cpu_s": round(pipeline.cpu_s, 3),
+                       "max_flush_step_ms": round(pipeline.max_flush_step_s * 1e3, 2)}
         return self.report
 
 

@@ -91,6 +91,8 @@ class RecordPipeline:
         self._thread: threading.Thread | None = None
         self.on_loop = False  # virtual time: drained by the owner on the loop, no thread
         self._next_flush = 0.0
+        self._flush_step_s = 0.002  # the room a step of a segment close is given between ticks (real time)
+        self.max_flush_step_s = 0.0  # the longest step seen (wall): what a tick could have waited without the guard
 
     # -- the loop's side ---------------------------------------------------------------------------
     def put(self, kind: str, topic: str, t: float, payload: Any) -> None:
@@ -169,11 +171,39 @@ class RecordPipeline:
         if now < self._next_flush or self.bag is None:
             return
         self._next_flush = now + self.flush_interval_s
-        try:
-            self.bag.flush()
+        try:  # the close holds the GIL (foxglove-sdk's MCAP close, then the metadata): in real time each
+            self._clear_of_tick()  # step starts just after a tick when it would not fit before the next
+            started = time.perf_counter()
+            wrote = self.bag.close_segment()
+            self._took(time.perf_counter() - started)
+            if wrote:
+                self._clear_of_tick()
+                started = time.perf_counter()
+                self.bag.write_metadata()
+                self._took(time.perf_counter() - started)
         except Exception as exc:
             self.errors += 1
             log.error("recording_flush_failed", error=repr(exc))
+
+    def _took(self, seconds: float) -> None:
+        """A step of a segment close took ``seconds`` (wall): the estimate the next one is given
+        room for (the longest recent step, decaying)."""
+        self.max_flush_step_s = max(self.max_flush_step_s, seconds)
+        self._flush_step_s = max(seconds, 0.8 * self._flush_step_s)
+
+    def _clear_of_tick(self) -> None:
+        """Real time (a writer thread): wait for the next tick to pass when the time left before
+        its deadline is less than a close step needs (``_flush_step_s``, plus a millisecond)."""
+        guard = self.tick_guard
+        if guard is None or self._thread is None:
+            return
+        origin, period = guard
+        need = self._flush_step_s + 0.001
+        if need >= period - 0.002:  # never fits between ticks: waiting would not help
+            return
+        to_next = period - (time.monotonic() - origin) % period
+        if to_next < need:
+            time.sleep(to_next + 0.0015)  # past the deadline and the tick itself
 
     # -- the writer thread -------------------------------------------------------------------------
     def _run(self) -> None:
