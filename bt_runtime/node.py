@@ -49,7 +49,7 @@ class NodeConfig:
 
     __slots__ = ("blackboard", "enums", "input_ports", "output_ports", "manifest", "uid", "path",
                  "_pre", "_post", "_other", "context", "wake_up", "timers", "clock",
-                 "registration_id", "_file", "_line", "_doc")
+                 "registration_id", "_file", "_line", "_doc", "_tag")
 
     def __init__(self, blackboard: Blackboard | None = None, *, input_ports: dict[str, str] | None = None,
                  output_ports: dict[str, str] | None = None, enums: dict[str, int] | None = None,
@@ -76,13 +76,13 @@ class NodeConfig:
         self.clock: Callable[[], float] = clock or timers.clock
         self.registration_id = manifest.registration_id if manifest else ""
         self._file: str | None = None
-        self._line: Any = None  # the line, or the lxml element while _doc is set (see source)
-        self._doc = None
+        self._line: int | None = None
+        self._doc = self._tag = None
 
     @classmethod
     def _for_node(cls, blackboard: Blackboard, enums: dict[str, int], manifest: TreeNodeManifest,
                   uid: int, path: str, context: Any, wake_up: WakeUpSignal, timers: TimerQueue,
-                  clock: Callable[[], float], doc: Any, element: Any) -> NodeConfig:
+                  clock: Callable[[], float], doc: Any, sourceline: int | None, tag: str) -> NodeConfig:
         """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
         positional arguments (much cheaper than the keyword call, once per node).
 
@@ -90,9 +90,9 @@ class NodeConfig:
         ``input_ports``/``output_ports`` are one shared, read-only empty mapping (two dicts
         fewer per node; most nodes of a tree are of such types).
 
-        The source line is kept as the lxml element with its document, resolved to the line
-        of the start tag only if someone asks (``source``): no per-node object (the registry's
-        plans keep the elements alive anyway)."""
+        The source line is kept as the parser's raw ``sourceline`` with its document and tag,
+        resolved to the line of the start tag only if someone asks (``source``): no per-node
+        object and no reference to the lxml element."""
         self = _new_object(cls)
         self.blackboard = blackboard
         self.enums = enums
@@ -111,8 +111,9 @@ class NodeConfig:
         self.clock = clock
         self.registration_id = manifest.registration_id
         self._file = doc.file
-        self._line = element  # until ``source`` resolves it
+        self._line = sourceline
         self._doc = doc
+        self._tag = tag
         return self
 
     @property
@@ -121,14 +122,14 @@ class NodeConfig:
         raw line: finding the start tag's line costs a text search, done only if someone asks."""
         doc = self._doc
         if doc is not None:
-            self._line = doc.line_of(self._line)  # (the element, until now)
-            self._doc = None
+            self._line = doc.line_at(self._tag, self._line)
+            self._doc = self._tag = None
         return (self._file, self._line)
 
     @source.setter
     def source(self, value: tuple[str | None, int | None]) -> None:
         self._file, self._line = value
-        self._doc = None
+        self._doc = self._tag = None
 
     @property
     def pre_conditions(self) -> dict[str, Any]:

@@ -145,7 +145,7 @@ class TreeBuilder:
         """Build the node of ``plan`` (what the registry read of its element, see ElementPlan)
         and its children: no lxml call here, so a SubTree expanded in many places reads its
         elements once."""
-        tag, type_id, name, items, attrs, conditions, child_plans, elem = plan
+        tag, type_id, name, items, attrs, conditions, sourceline, child_plans, elem = plan
         if tag == "SubTree":
             return self._build_subtree(plan, doc, record, prefix, stack)
         factory = self.factory
@@ -168,7 +168,7 @@ class TreeBuilder:
         rule = factory.substitution_for(name, type_id, path) if factory.substitution_rules else None
         builder = factory.builders[type_id] if rule is None else factory.substitution_builder(rule)
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
-                           self.wake_up, self.timers, self.clock_holder[0], doc, elem)
+                           self.wake_up, self.timers, self.clock_holder[0], doc, sourceline, tag)
         # Port passes only when there is something to do (most nodes have no port attributes).
         if attrs is not None:
             self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
@@ -357,7 +357,7 @@ class TreeBuilder:
 
     def _build_subtree(self, plan: ElementPlan, doc: XMLDocument, record: SubtreeRecord, prefix: str,
                        stack: list[str]) -> TreeNode:
-        _, sub_id, name_attr, items, attrs, conditions, _, elem = plan
+        _, sub_id, name_attr, items, attrs, conditions, sourceline, _, elem = plan
         if attrs is None:
             attrs = {}
         definition: TreeDefinition | None = self.registry.trees.get(sub_id)
@@ -376,7 +376,7 @@ class TreeBuilder:
         self._paths.add(path)
         factory = self.factory
         cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context, self.wake_up,
-                           self.timers, self.clock_holder[0], doc, elem)
+                           self.timers, self.clock_holder[0], doc, sourceline, "SubTree")
         if conditions:
             self._compile_conditions(cfg, conditions, doc, elem)
         if self.factory.substitution_rules:

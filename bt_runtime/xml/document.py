@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import warnings
+import weakref
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -37,9 +38,11 @@ _PORT_TAGS = {"input_port": PortDirection.INPUT, "output_port": PortDirection.OU
 # What the builder needs of one element, read from lxml once when the document is checked (a
 # SubTree used in many places is expanded as often; lxml calls cost 0.1-0.3 us each):
 # (tag, type ID (a SubTree's ID), name attribute or None, attribute items, attributes as a dict
-# or None when there are none, pre/post-condition attributes in BT.CPP's order, children's
-# plans, the element itself for line numbers). Never mutated.
-ElementPlan = tuple[str, str, "str | None", tuple, "dict[str, str] | None", tuple, tuple, etree._Element]
+# or None when there are none, pre/post-condition attributes in BT.CPP's order, lxml sourceline
+# (what a node keeps for its line), children's plans, the element itself for error messages).
+# Never mutated.
+ElementPlan = tuple[str, str, "str | None", tuple, "dict[str, str] | None", tuple, "int | None", tuple,
+                    etree._Element]
 
 PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")  # in BT.CPP's order
 POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
@@ -104,7 +107,11 @@ class TreeRegistry:
     """The factory's registry of tree definitions and models, fed by documents."""
 
     def __init__(self, factory: BehaviorTreeFactory):
-        self.factory = factory
+        # The factory's registry of node types (never replaced), not the factory: a registry
+        # pointing back at its factory made every dropped factory (with its documents and
+        # plans) garbage for the cyclic collector to find.
+        self._manifests = factory.manifests
+        self._factory = weakref.ref(factory)
         self.trees: dict[str, TreeDefinition] = {}
         self.subtree_models: dict[str, dict[str, PortInfo]] = {}
         self.node_models: dict[str, NodeModel] = {}
@@ -112,6 +119,10 @@ class TreeRegistry:
         self._documents_opened = 0
         self._anonymous = 0
         self.include_search_paths: list[Path] = []  # folders <include> may reach besides the top file's
+
+    @property
+    def factory(self) -> BehaviorTreeFactory | None:
+        return self._factory()
 
     # -- entry points --------------------------------------------------------------------------
     def load_text(self, text: str | bytes, file: str | None = None) -> LoadResult:
@@ -181,7 +192,7 @@ class TreeRegistry:
                 self._anonymous += 1
             else:
                 check_model_name(tree_id, "BehaviorTree ID", doc, bt)
-            if tree_id in self.factory.manifests:
+            if tree_id in self._manifests:
                 raise self._err(doc, bt, "The attribute [ID] of tag <BehaviorTree> must not use the name "
                                          "of a registered Node")
             if len(element_children(bt)) != 1:
@@ -269,7 +280,7 @@ class TreeRegistry:
         if depth > MAX_DEPTH:
             raise self._err(doc, elem, f"Maximum XML nesting depth exceeded (limit: {MAX_DEPTH}). "
                                        "The XML is too deeply nested.")
-        manifests = self.factory.manifests
+        manifests = self._manifests
         tag = elem.tag
         children = elem[:] if len(elem) else ()  # element_children(elem), inlined: most are leaves
         for child in children:  # (a loop in this frame: a comprehension costs a frame and a list)
@@ -298,7 +309,7 @@ class TreeRegistry:
                 raise self._err(doc, elem, "The attribute [ID] of tag <SubTree> must not use the name of "
                                            "a registered Node")
             shape.subtrees.append((sub_id, elem, depth))
-            return (tag, sub_id, name, items, attrs, conditions, (), elem)
+            return (tag, sub_id, name, items, attrs, conditions, elem.sourceline, (), elem)
         if depth >= shape.plain_depth:  # (the last deepest, as depth.py's own walk finds)
             shape.plain_depth = depth
             shape.plain_elem = elem
@@ -337,14 +348,14 @@ class TreeRegistry:
             plans = tuple(plans)
         else:
             plans = ()
-        return (tag, type_id, name, items, attrs, conditions, plans, elem)
+        return (tag, type_id, name, items, attrs, conditions, elem.sourceline, plans, elem)
 
     def _check_reactive_children(self, doc: XMLDocument, elem: etree._Element,
                                  children: list[etree._Element]) -> None:
         """BT.CPP 4.10 refuses a ReactiveSequence with more than one asynchronous control child
         (by element name: an AsyncSequence, or a control registered under one of BT.CPP's
         asynchronous class names). ReactiveFallback has no such check in 4.10."""
-        manifests = self.factory.manifests
+        manifests = self._manifests
         async_count = 0
         for child in children:
             manifest = manifests.get(child.tag)

@@ -73,3 +73,23 @@ def test_loading_keeps_the_applications_frozen_objects_frozen() -> None:
         assert gc.get_freeze_count() == frozen
     finally:
         gc.unfreeze()
+
+
+def test_a_dropped_factory_and_its_tree_leave_no_cycles_behind() -> None:
+    """A runtime that reloads builds a new factory each time: the old one, with its documents
+    and their plans, is freed by reference counting too."""
+    tree = _factory().create_tree("Main")  # warm every lazy cache
+    del tree
+    gc.collect()
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        factory = _factory()
+        tree = factory.create_tree("Main")
+        tree.root_blackboard.set("n", 0)
+        assert tree.tick_exactly_once() is NodeStatus.SUCCESS
+        del factory, tree
+        assert gc.collect() == 0
+    finally:
+        if was:
+            gc.enable()
