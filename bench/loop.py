@@ -25,8 +25,10 @@ the robot (to alternate goals, so it never arrives), every pacing in turn in the
 
 (The tick loop paces every loop the same way; the peers differ in the loop only.)
 
-Printed per pacing: ticks, overruns, lateness p50/p99/p99.9, tick cost (CPU of the tree's tick),
-and CPU use as a share of one core over the measured window (after a warm-up), in total and
+Printed per pacing: ticks, overruns (deadlines skipped: the process was descheduled or a tick
+ran long), lateness p50/p99/p99.9, tick cost (CPU of the tree's tick), the event loop thread's
+CPU per tick (comparable between runs with and without overruns), and CPU use as a share of
+one core over the measured window (after a warm-up), in total and
 by thread: ``loop`` the event loop's (tick, gate, supervisor, backup, delivery and conversion
 of sensor messages), ``watchdog`` the off-loop dead-man's, ``other`` the rest (Cyclone DDS's
 receive threads, which take and decode the sensor samples). Thread CPU comes from
@@ -223,7 +225,7 @@ async def measure(shape: str, robot: RobotProcess | None, seconds: float, warmup
         await asyncio.gather(task, return_exceptions=True)
     if goal is not None and shape == "ros2":
         await asyncio.sleep(0.3)  # let the robot hear the cancel before the next run
-    return {"stats": stats, "cpu": cpu, "threads": threads}
+    return {"stats": stats, "cpu": cpu, "threads": threads, "wall": wall}
 
 
 def _loop_factory(pacing: str):
@@ -245,8 +247,9 @@ def run_one(shape: str, robot: RobotProcess | None, seconds: float, warmup: floa
 def report(name: str, result: dict, histogram: bool) -> None:
     stats = result["stats"]
     pct = stats.lateness_percentiles((50, 99, 99.9))
+    per_tick = result["threads"].get("loop", 0.0) * result["wall"] / max(1, stats.count)
     print(f"{name:<12}{stats.count:>7}{stats.overruns:>6}" + "".join(f"{v * 1e3:>10.3f}" for v in pct.values())
-          + f"{stats.cost_mean * 1e6:>9.1f}{result['cpu'] * 100:>8.2f}"
+          + f"{stats.cost_mean * 1e6:>9.1f}{per_tick * 1e6:>9.1f}{result['cpu'] * 100:>8.2f}"
           + "".join(f"{result['threads'].get(k, 0.0) * 100:>9.2f}" for k in THREADS), flush=True)
     if histogram:
         total = max(1, min(stats.count, stats.keep))
@@ -270,9 +273,9 @@ def verdict(results: dict) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true",
-                        help="every shape and pacing, idle and driving, 4 s each (< 2 min in all)")
-    parser.add_argument("--seconds", type=float, default=None, help="measured seconds per run (10; --quick 4)")
-    parser.add_argument("--warmup", type=float, default=None, help="seconds after start before measuring (2; --quick 1.5)")
+                        help="every shape and pacing, idle and driving, 3 s each (< 2 min in all)")
+    parser.add_argument("--seconds", type=float, default=None, help="measured seconds per run (10; --quick 3)")
+    parser.add_argument("--warmup", type=float, default=None, help="seconds after start before measuring (2; --quick 1.2)")
     parser.add_argument("--shapes", default="bare,ros2,sim", help="comma-separated: bare, ros2, sim")
     parser.add_argument("--pacings", default="efficient,precise,asyncio,uvloop")
     parser.add_argument("--idle-only", action="store_true", help="skip the driving runs")
@@ -281,8 +284,8 @@ def main() -> None:
                         help="event-loop CPU by callback (asyncio loops only; adds its own overhead)")
     parser.add_argument("--domain", type=int, default=None, help="DDS domain of the ros2 shape (230-232)")
     args = parser.parse_args()
-    seconds = args.seconds if args.seconds is not None else (4.0 if args.quick else 10.0)
-    warmup = args.warmup if args.warmup is not None else (1.5 if args.quick else 2.0)
+    seconds = args.seconds if args.seconds is not None else (3.0 if args.quick else 10.0)
+    warmup = args.warmup if args.warmup is not None else (1.2 if args.quick else 2.0)
     quiet_logging("error")
     pacings = args.pacings.split(",")
     if "uvloop" in pacings:
@@ -307,7 +310,7 @@ def main() -> None:
                 print(f"\n{HEADINGS[shape]}\n{'driving' if drive else 'idle tree, robot standing'}, "
                       f"{seconds:g} s each")
                 print(f"{'pacing':<12}{'ticks':>7}{'over':>6}{'p50 ms':>10}{'p99 ms':>10}{'p99.9 ms':>10}"
-                      f"{'cost us':>9}{'CPU %':>8}" + "".join(f"{k:>9}" for k in THREADS))
+                      f"{'cost us':>9}{'loop us':>9}{'CPU %':>8}" + "".join(f"{k:>9}" for k in THREADS))
                 for i, pacing in enumerate(pacings):
                     goal = GOALS[i % 2] if drive else None
                     use = breakdown if pacing in ("efficient", "precise", "asyncio") else None
