@@ -129,7 +129,9 @@ def make_driver(shape: str, robot: RobotProcess | None):
     if shape == "ros2":
         from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver
 
-        return Ros2Driver(Ros2Config(domain_id=robot.domain))
+        # no lifecycle bring-up: sim-robot's servers start active (--nav-autostart), and the
+        # bring-up's polling of their services would fall into the measured window
+        return Ros2Driver(Ros2Config(domain_id=robot.domain, lifecycle={"bringup": {"enabled": False}}))
     from sim.driver import SimDriver
 
     return SimDriver("apartment", "burger", seed=1)

@@ -28,9 +28,10 @@ class TickConfig(_Model):
     rate_hz: float = Field(100.0, gt=0, description="tree tick rate")
     stop_on_completion: bool = Field(True, description="stop when the root returns SUCCESS/FAILURE")
     pacing: Literal["efficient", "precise"] = Field(
-        "efficient", description="real-time pacing: 'efficient' sleeps to each deadline (microsecond "
-                                 "timers, ~2 % of a core at 100 Hz); 'precise' also yields to the loop "
-                                 "for spin_window_s before it (lowest lateness, ~20-30 % of a core)")
+        "efficient", description="real-time pacing: 'efficient' is one loop timer per deadline "
+                                 "(microsecond timers; pacing alone ~1-2 % of a core at 100 Hz); 'precise' "
+                                 "also yields to the loop for spin_window_s before it (lowest lateness, "
+                                 "~20-30 % of a core)")
     spin_window_s: float = Field(0.0035, ge=0, description="pacing 'precise': yield-until-deadline window")
     phase: float = Field(0.5, ge=0, lt=1, description="tick deadlines sit this fraction of a period after "
                                                        "the driver's start, away from its periodic work")
