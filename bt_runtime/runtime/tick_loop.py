@@ -129,15 +129,17 @@ class TickLoop:
         on the same grid, skipping deadlines a slow tick has already passed.
         """
         loop = asyncio.get_running_loop()
-        realtime = self.realtime if self.realtime is not None else not is_virtual(loop)
-        precise = realtime and self.config.pacing == "precise"
+        # a virtual-time loop always takes the task path (its time only moves when the loop is
+        # idle, so precise pacing's yields would never reach the deadline)
+        timer_paced = not is_virtual(loop) and (self.realtime is None or self.realtime)
+        precise = timer_paced and self.config.pacing == "precise"
         self.tree.set_clock(loop.time)
         self.done = loop.create_future()
         period = self.period
         t0 = loop.time() if start_at is None else start_at
         k = max(0, int((loop.time() - t0) // period))
         try:
-            if realtime:  # one loop timer per tick (pacing.py)
+            if timer_paced:  # one loop timer per tick (pacing.py)
                 self.pacer = TimerPacer(self, loop, t0, k, precise=precise, spin_window=self.config.spin_window_s)
                 await self.pacer.run()
             else:
@@ -148,7 +150,8 @@ class TickLoop:
         return self.status
 
     async def _run_virtual(self, loop: asyncio.AbstractEventLoop, t0: float, k: int) -> None:
-        """The task path, kept for virtual-time loops: a run's event order is part of its trace."""
+        """The task path: virtual-time loops (a run's event order is part of its trace), and
+        ``realtime=False``."""
         period = self.period
         while True:
             k += 1

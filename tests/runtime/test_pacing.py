@@ -110,3 +110,19 @@ def test_cancelling_the_tick_task_from_inside_a_tick_stops_the_ticking() -> None
 
     assert clock.run(main, virtual=False)
     assert len(ticks) == 3 and loop.done.done()
+
+
+def test_a_virtual_time_loop_takes_the_task_path_even_when_told_real_time() -> None:
+    """Precise pacing yields until the deadline; virtual time only moves when the loop is idle,
+    so on a virtual loop that would never end: the tick loop sleeps there instead."""
+    from bt_runtime import BehaviorTreeFactory
+    from bt_runtime.runtime import tick_loop
+
+    tree = BehaviorTreeFactory().create_tree_from_text(SLEEP_TREE)
+    loop = tick_loop.TickLoop(tree, TickConfig(pacing="precise"), realtime=True)
+
+    async def main():
+        return await asyncio.wait_for(loop.run(), 1.0)
+
+    assert clock.run(main, virtual=True).name == "SUCCESS"
+    assert loop.pacer is None and loop.stats.count >= 3
