@@ -1,0 +1,102 @@
+"""Cold load time of this checkout's bt_runtime against another checkout's, and both against
+BT.CPP-py: the before/after table of a load change, measured in one run.
+
+Each round runs one subprocess per checkout (alternating which goes first), so machine load
+hits both alike; each subprocess loads every tree ``--loads`` times cold (compiled scripts
+forgotten first, as in a fresh process), interleaved with BT.CPP-py loads of the same XML,
+with the garbage collector on. The trees come from this checkout's bench/treegen.py and the
+loading code from bench/tick.py (``ours_tree``, ``btcpp_tree``), run against each checkout's
+bt_runtime. Printed per tree: us per node (median over rounds of each round's median), the
+ratio new/old, BT.CPP-py's us per node, each checkout's ratio to BT.CPP-py (median and range
+over rounds), and 2nd/1st (later loads over the first load of a subprocess: about 1 when a
+dropped tree is freed at once).
+
+Run: python bench/load_compare.py --other /path/to/old/checkout [--trees mixed:1000,...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parent
+DEFAULT_TREES = ("mixed:100,mixed:1000,mixed:5000,mixed:20000,builtin:1000,builtin:10000,scripts:1000,"
+                 "scripts:10000,precond:1000,precond:10000,bbheavy:1000,bbheavy:10000")
+
+# Runs in a subprocess whose working directory is the checkout measured.
+WORKER = """
+import gc, json, os, sys, time
+sys.path[:0] = [os.getcwd(), sys.argv[1]]
+import tick
+from treegen import SHAPES
+gc.enable()
+clock = time.process_time
+warm = SHAPES["mixed"](10)
+tick.ours_tree(warm.xml, warm.preset)
+tick.btcpp_tree(warm.xml, warm.preset)
+out = {}
+for spec in sys.argv[2].split(","):
+    shape, size = spec.split(":")
+    g = SHAPES[shape](int(size))
+    ours, peer, first = [], [], None
+    for i in range(int(sys.argv[3]) + 1):
+        tick._clear_script_cache()
+        t0 = clock(); tick.ours_tree(g.xml, g.preset); elapsed = clock() - t0
+        if i == 0:
+            first = elapsed
+        else:
+            ours.append(elapsed)
+        t0 = clock(); tick.btcpp_tree(g.xml, g.preset); peer.append(clock() - t0)
+    tick.ours_tree.keep = None
+    out[spec] = {"nodes": g.nodes, "ours": ours, "peer": peer[1:], "first": first}
+print(json.dumps(out))
+"""
+
+
+def _run(checkout: Path, trees: str, loads: int) -> dict:
+    done = subprocess.run([sys.executable, "-c", WORKER, str(BENCH), trees, str(loads)], cwd=checkout,
+                          capture_output=True, text=True, check=True)
+    return json.loads(done.stdout)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--other", required=True, type=Path, help="the checkout to compare against (old)")
+    parser.add_argument("--trees", default=DEFAULT_TREES, help="shape:nodes,... (bench/treegen.py shapes)")
+    parser.add_argument("--rounds", type=int, default=4)
+    parser.add_argument("--loads", type=int, default=5, help="cold loads per tree per subprocess")
+    args = parser.parse_args()
+    checkouts = {"old": args.other.resolve(), "new": BENCH.parent}
+    rows: dict[str, dict[str, dict[str, list[float]]]] = {"old": {}, "new": {}}
+    nodes: dict[str, int] = {}
+    print(f"load average at start: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    for r in range(args.rounds):
+        for name in (("old", "new") if r % 2 == 0 else ("new", "old")):
+            for spec, d in _run(checkouts[name], args.trees, args.loads).items():
+                nodes[spec] = d["nodes"]
+                row = rows[name].setdefault(spec, {"ours": [], "peer": [], "ratio": [], "second": []})
+                ours, peer = statistics.median(d["ours"]), statistics.median(d["peer"])
+                row["ours"].append(ours)
+                row["peer"].append(peer)
+                row["ratio"].append(ours / peer)
+                row["second"].append(ours / d["first"])
+    print(f"load average at end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    med = statistics.median
+    print(f"{'tree':<16}{'nodes':>7} | {'old us/n':>9}{'new us/n':>9}{'new/old':>8} | {'BT us/n':>8} | "
+          f"{'old/BT.CPP':>16}{'new/BT.CPP':>16} | {'2nd/1st old, new':>16}")
+    for spec, n in nodes.items():
+        old, new = rows["old"][spec], rows["new"][spec]
+        span = lambda v: f"{med(v):.2f} ({min(v):.1f}-{max(v):.1f})"  # noqa: E731
+        print(f"{spec:<16}{n:>7} | {med(old['ours']) * 1e6 / n:>9.2f}{med(new['ours']) * 1e6 / n:>9.2f}"
+              f"{med(new['ours']) / med(old['ours']):>8.2f} | {med(old['peer'] + new['peer']) * 1e6 / n:>8.2f} | "
+              f"{span(old['ratio']):>16}{span(new['ratio']):>16} | "
+              f"{med(old['second']):>7.2f}, {med(new['second']):.2f}")
+
+
+if __name__ == "__main__":
+    main()
