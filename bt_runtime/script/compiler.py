@@ -260,6 +260,7 @@ def _sequence(fns: list[Fn]) -> Fn:
         for f in head:
             f(bb, enums)
         return last(bb, enums)
+    sequence.shape = ("sequence", tuple(fns))  # type: ignore[attr-defined]  # node_ticks
     return sequence
 
 
@@ -469,7 +470,7 @@ class Script:
         tick = self._action_tick
         if tick is None:
             general = partial(_run_action, self._fn, self.text)
-            tick = self._action_tick = script_node_tick(self._fn, general) or general
+            tick = self._action_tick = script_node_tick(self._fn, general, self.text) or general
         return tick
 
     def condition_tick(self) -> Any:

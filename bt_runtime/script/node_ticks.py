@@ -17,17 +17,22 @@ from collections.abc import Callable
 from time import monotonic_ns as _monotonic_ns
 from typing import Any
 
+from ..errors import BTRuntimeError
 from ..status import FAILURE, SUCCESS, NodeStatus
+from .errors import CastError, ScriptRuntimeError
 
 NodeTick = Callable[[Any], NodeStatus]
 
 
-def script_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
-    """A one-call tick for a Script node whose compiled script is ``fn``, or None."""
+def script_node_tick(fn: Any, slow: NodeTick, text: str = "") -> NodeTick | None:
+    """A one-call tick for a Script node whose compiled script is ``fn`` (source ``text``), or
+    None."""
     shape = getattr(fn, "shape", None)
     if shape is None:
         return None
     kind = shape[0]
+    if kind == "sequence":
+        return _statements(shape[1], text)
     if kind == "update":
         return _update(*shape[1:], slow)
     if kind == "arith":
@@ -57,6 +62,24 @@ def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
                     return FAILURE if fails(x, number) else SUCCESS
         return slow(node)
     return order_tick
+
+
+def _statements(fns: tuple, text: str) -> NodeTick:
+    """``a; b; c``: the statements' closures called from the node's tick, errors reported as
+    ``Script.run`` reports them (compiler._run_action and the statement list in one frame)."""
+    def statements_tick(node, fns=fns, text=text):
+        cfg = node.config
+        bb = cfg.blackboard
+        enums = cfg.enums
+        try:
+            for f in fns:
+                f(bb, enums)
+        except CastError:
+            raise
+        except BTRuntimeError as exc:
+            raise ScriptRuntimeError(f"Error in script [{text}]\n{exc}") from exc
+        return SUCCESS
+    return statements_tick
 
 
 def _update(key: str, arith: Callable[[float, float], float], number: float, slow: NodeTick) -> NodeTick:
