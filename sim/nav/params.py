@@ -64,6 +64,13 @@ class PlannerParams(_Model):
     """Grid planner (cost-aware 8-connected A*, like Smac2D; GridBased in Nav2 terms)."""
 
     cost_penalty: float = Field(2.0, ge=0)  # [nav2] Smac2D cost_penalty
+    # [ours] cells within ``pinch_margin`` m beyond the inscribed radius cost ``pinch_penalty``
+    # more each: a plan keeps a margin where the map leaves room for one, and squeezes through a
+    # pinch only when there is no reasonable way round (docs/nav.md: the lidar marks an obstacle's
+    # edge a cell further out than the static map, so a plan through such a gap is refused by the
+    # controller's local costmap, attempt after attempt). 0 disables it.
+    pinch_penalty: float = Field(10.0, ge=0)
+    pinch_margin: float = Field(0.075, ge=0)
     allow_unknown: bool = True  # [tb3] GridBased.allow_unknown
     # [nav2] NavFn GridBased.tolerance: an occupied goal is replaced by the nearest plannable
     # cell within this (square) distance; only beyond it does planning fail (GOAL_OCCUPIED)

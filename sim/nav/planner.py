@@ -41,7 +41,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from bt_runtime.runtime.messages import NavErrorCode, Pose2D
 
-from .costmap import INSCRIBED, LETHAL, NO_INFORMATION, GlobalCostmap
+from .costmap import INSCRIBED, LETHAL, NO_INFORMATION, GlobalCostmap, inflation_cost
 from .params import PlannerParams
 
 SQRT2 = math.sqrt(2.0)
@@ -108,12 +108,18 @@ class GridPlanner:
         self._labels: tuple[tuple[int, bool], np.ndarray] | None = None
         self._relaxed_w: tuple[int, np.ndarray, np.ndarray] | None = None
         self.last: PlanResult | None = None
+        inf = costmap.inflator  # the cost of a cell pinch_margin beyond the inscribed radius
+        self._pinch_cost = int(inflation_cost(inf.inscribed_radius + self.params.pinch_margin,
+                                              inf.inscribed_radius, inf.inflation_radius,
+                                              inf.cost_scaling_factor, costmap.resolution)) or 1
 
     # -- weights -------------------------------------------------------------------------
     def _weights(self, cost: np.ndarray, allow_unknown: bool) -> np.ndarray:
         """Padded flat per-cell weights (inf = blocked)."""
         c = cost.astype(np.float64)
         w = 1.0 + self.params.cost_penalty * c / 252.0
+        if self.params.pinch_penalty > 0 and self.params.pinch_margin > 0:
+            w[(cost >= self._pinch_cost) & (cost < INSCRIBED)] += self.params.pinch_penalty
         w[(cost == INSCRIBED) | (cost == LETHAL)] = np.inf
         unknown = cost == NO_INFORMATION
         w[unknown] = 1.0 if allow_unknown else np.inf

@@ -50,10 +50,19 @@ def path_with_box(world: str, robot: str, start: tuple[float, float], goal: tupl
     data[box_cells(data.shape, raster.resolution, (raster.origin[0], raster.origin[1]), box["x"], box["y"],
                    box["yaw"], box["width"], box["depth"])] = 100
     grid = OccupancyGrid(data, raster.resolution, (raster.origin[0], raster.origin[1], 0.0))
-    res = NavStack(Bus(), grid, robot=params).planner.plan(Pose2D(*start), Pose2D(*goal))
+    res = static_plans(NavStack(Bus(), grid, robot=params).planner).plan(Pose2D(*start), Pose2D(*goal))
     if not res.ok or res.points is None or len(res.points) < 2:
         return math.inf
     return float(np.hypot(*np.diff(res.points[:, :2], axis=0).T).sum())
 
 
-__all__ = ["box_cells", "path_with_box"]
+def static_plans(planner):
+    """The planner as the generator uses it: shortest cost-aware paths without the pinch
+    penalty (``PlannerParams.pinch_penalty``), so the variants drawn from a seed (where a box
+    stands along the path, which trips qualify) stay the same whatever the layer's planner
+    prefers; whether a way exists does not depend on it."""
+    planner.params = planner.params.model_copy(update={"pinch_penalty": 0.0})
+    return planner
+
+
+__all__ = ["box_cells", "path_with_box", "static_plans"]

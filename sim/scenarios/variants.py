@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .box_check import path_with_box
+from .box_check import path_with_box, static_plans
 from .runspec import RunSpec
 from .spec import ScenarioSpec
 
@@ -49,6 +49,7 @@ def _planner(world: str, robot: str):
     grid = OccupancyGrid(np.where(raster.data > 0, 100, 0).astype(np.int8), raster.resolution,
                          (raster.origin[0], raster.origin[1], 0.0))
     nav = NavStack(Bus(), grid, robot=robot_params_for(sim))
+    static_plans(nav.planner)
     return nav.planner, sim.world
 
 
