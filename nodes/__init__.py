@@ -17,6 +17,7 @@ AUTONOMY_NODES = [
     health.EmergencyStop, health.ReleaseEmergencyStop, health.IsSafeToContinue, health.RestartServerAfterError,
     collision.CollisionDetected, collision.InContact, collision.EstimateContactPoint, collision.ReverseOut,
     collision.StopRobot, collision.ReleaseRobot, collision.MarkObstacle, collision.ClearCostmaps,
+    collision.RelaxCollisionMarks,
     battery.BatteryCanReach, battery.BatteryAbove, battery.RefuseGoal,
     docking.ChargeUntil, docking.GoalStatusIs, docking.OnCharger, docking.WhileGoalStatusIs,
     path.RatePathQuality, path.PathReachesGoal, path.PlannerAnswers,

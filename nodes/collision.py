@@ -18,7 +18,7 @@ from bt_runtime import AsyncActionNode, ConditionNode, NodeStatus, StatefulActio
 from bt_runtime.ports import input_port, output_port
 from bt_runtime.runtime.messages import Contact, Imu, Pose2D, wrap_angle
 
-from .contact import ContactArc, marks_of, segments_arc
+from .contact import ContactArc, ObstacleMarks, marks_of, segments_arc
 from .robot import robot_pose
 from .stall import MotionMismatch
 from .types import CONTACT_ARC, POSE
@@ -297,29 +297,67 @@ class MarkObstacle(AsyncActionNode):
                 input_port("depth", float, 0.0, "m: rows of discs this far behind the touched arc (the "
                                                  "body behind the surface; 0: the arc only)"),
                 input_port("merge_distance", float, 0.3, "m: a hit this close to a mark grows it"),
+                input_port("core_radius", float, 0.05, "m: discs of the mark's core (the sensed arc and "
+                                                       "``depth`` behind it, no margins), what is left "
+                                                       "when RelaxCollisionMarks shrinks it"),
                 output_port("mark", int, "{collision_mark}", "index of the mark made or grown")]
 
     async def run(self):
         ctx = self.context
         radius = self.get_input("radius")
         arc = self.get_input("arc", None)
+        core = None
         if isinstance(arc, ContactArc):
+            depth = self.get_input("depth")
             points = arc.chord(arc.radius + radius, self.get_input("margin"), self.get_input("outward"))
-            points = arc.behind(points, self.get_input("depth"), radius)
+            points = arc.behind(points, depth, radius)
+            core_r = min(max(self.get_input("core_radius"), 0.01), radius)
+            core_points = arc.behind(arc.chord(arc.radius + core_r, 0.0), depth, core_r)
             # where the body stands now (it backed out) is free space: a wide arc (two bumper
             # segments, plus margins) reaches behind the contact and must not mark it
             pose = robot_pose(self)
             if pose is not None and all(map(math.isfinite, (pose.x, pose.y))):
-                keep = ctx.robot.radius + radius
-                free = [p for p in points if math.hypot(p[0] - pose.x, p[1] - pose.y) >= keep]
-                points = free or points[len(points) // 2:len(points) // 2 + 1]
+                points = _clear_of(points, pose, ctx.robot.radius + radius)
+                core_points = _clear_of(core_points, pose, ctx.robot.radius + core_r)
+            core = [(x, y, core_r) for x, y in core_points]
         else:
             point = self.get_input("point")
             points = [(point.x, point.y)]
-        index, discs = marks_of(ctx).place(points, radius, self.get_input("merge_distance"))
+        index, discs = marks_of(ctx).place(points, radius, self.get_input("merge_distance"), core)
         for x, y, r in discs:
             await ctx.navigation.add_obstacle(x, y, r)
         self.set_output("mark", index)
+        return SUCCESS
+
+
+def _clear_of(points: list[tuple[float, float]], pose: Pose2D, keep: float) -> list[tuple[float, float]]:
+    """``points`` at least ``keep`` from the robot's centre (else the middle one)."""
+    free = [p for p in points if math.hypot(p[0] - pose.x, p[1] - pose.y) >= keep]
+    return free or points[len(points) // 2:len(points) // 2 + 1]
+
+
+class RelaxCollisionMarks(AsyncActionNode):
+    """Shrink the collision marks to what was sensed (``Mark.core``: the touched arc and the
+    body behind it, without the margins and the far-side extension) when a plan finds no way:
+    a mark is wider than what the robot touched, and beside a doorway or in a passage the margin
+    can close the only way to the goal that the obstacle itself leaves open. The map is marked
+    again from the shrunk marks. Each mark is relaxed once (a mark that grows after a new touch
+    can be relaxed again). FAILURE when there was nothing to relax (no marks, or all relaxed),
+    so the caller goes on to its other ways of handling "no path"."""
+
+    async def run(self):
+        ctx = self.context
+        marks = ctx.extras.get("collision_marks")
+        if not isinstance(marks, ObstacleMarks) or not marks.relax():
+            return FAILURE
+        try:
+            await ctx.navigation.clear_obstacles()
+            for x, y, r in marks.discs():
+                await ctx.navigation.add_obstacle(x, y, r)
+        except Exception as exc:  # a navigation that cannot do it fails the node, never the tick
+            ctx.extras["relax_marks_error"] = f"{type(exc).__name__}: {exc}"
+            return FAILURE
+        log.info("collision_marks_relaxed", marks=len(marks.marks), discs=len(marks.discs()))
         return SUCCESS
 
 

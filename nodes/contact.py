@@ -105,9 +105,13 @@ def segments_arc(spans: tuple[tuple[float, float], ...], pressed: tuple[int, ...
 
 @dataclass(slots=True)
 class Mark:
-    """One obstacle as marked in the map: the discs sent to navigation."""
+    """One obstacle as marked in the map: the discs sent to navigation (``discs``) and its
+    *core*, the discs over what was sensed alone (the touched arc and the body behind it, no
+    margins): what stays when the mark is relaxed because it closes the only way."""
 
     discs: list[tuple[float, float, float]] = field(default_factory=list)  # (x, y, radius)
+    core: list[tuple[float, float, float]] = field(default_factory=list)
+    relaxed: bool = False
 
     def distance_to(self, x: float, y: float) -> float:
         return min(math.hypot(x - dx, y - dy) - r for dx, dy, r in self.discs)
@@ -119,11 +123,12 @@ class ObstacleMarks:
     def __init__(self) -> None:
         self.marks: list[Mark] = []
 
-    def place(self, points: list[tuple[float, float]], radius: float,
-              merge_distance: float) -> tuple[int, list[tuple[float, float, float]]]:
+    def place(self, points: list[tuple[float, float]], radius: float, merge_distance: float,
+              core: list[tuple[float, float, float]] | None = None) -> tuple[int, list[tuple[float, float, float]]]:
         """Add discs of ``radius`` at ``points``: to the mark that lies within
-        ``merge_distance`` of any of them (that mark grows), else as a new mark. Returns the
-        mark's index and the discs that are new."""
+        ``merge_distance`` of any of them (that mark grows), else as a new mark; ``core`` (the
+        discs over what was sensed alone) joins the mark's core. Returns the mark's index and
+        the discs that are new."""
         target = None
         for i, mark in enumerate(self.marks):
             if any(mark.distance_to(x, y) <= merge_distance + radius for x, y in points):
@@ -136,7 +141,25 @@ class ObstacleMarks:
         new = [(x, y, radius) for x, y in points
                if not any(math.hypot(x - dx, y - dy) < 0.5 * radius for dx, dy, _ in mark.discs)]
         mark.discs.extend(new)
+        mark.core.extend(core if core is not None else [(x, y, radius) for x, y in points])
+        if new:
+            mark.relaxed = False
         return target, new
+
+    def relax(self) -> bool:
+        """Shrink every mark not yet relaxed to its core. True if any mark changed (then the
+        map must be marked again from ``discs()``)."""
+        changed = False
+        for mark in self.marks:
+            if not mark.relaxed:
+                mark.relaxed = True
+                if mark.core and mark.core != mark.discs:
+                    mark.discs = list(mark.core)
+                    changed = True
+        return changed
+
+    def discs(self) -> list[tuple[float, float, float]]:
+        return [d for mark in self.marks for d in mark.discs]
 
 
 def marks_of(context) -> ObstacleMarks:

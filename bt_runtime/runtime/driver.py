@@ -95,6 +95,9 @@ class NavigationClient(Protocol):
     async def add_obstacle(self, x: float, y: float, radius: float = 0.1) -> None:
         """Mark an obstacle in the map (persists across costmap clears)."""
 
+    async def clear_obstacles(self) -> None:
+        """Remove every obstacle marked with ``add_obstacle`` (to mark them again, smaller)."""
+
     def is_path_valid(self, path: Path, max_cost: int = 253) -> bool: ...
 
     def path_clearance(self, path: Path) -> float:

@@ -401,6 +401,13 @@ class GlobalCostmap(Costmap2D):
         self._mark_disc(self.updates, x, y, radius)
         self.base_version += 1
 
+    def clear_updates(self) -> None:
+        """Drop every ``add_obstacle`` disc (they are marked again, smaller, by the caller)."""
+        if self.updates.any():
+            self.updates.fill(False)
+            self.base_version += 1
+            self._recompute_all()
+
     def add_phantom(self, x: float, y: float, radius: float) -> None:
         """A fault-injected lethal disc, gone after ``clear()``."""
         self._mark_disc(self.phantom, x, y, radius)

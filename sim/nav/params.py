@@ -71,6 +71,11 @@ class PlannerParams(_Model):
     # controller's local costmap, attempt after attempt). 0 disables it.
     pinch_penalty: float = Field(10.0, ge=0)
     pinch_margin: float = Field(0.075, ge=0)
+    # [ours] near the map-update layer (collision marks): extra weight from ``mark_penalty`` at
+    # the inscribed radius down to 0 at ``mark_halo`` m beyond it. A mark covers where a touch
+    # was sensed, not the whole obstacle; a plan keeps a wider berth where it can. 0 disables it.
+    mark_penalty: float = Field(4.0, ge=0)
+    mark_halo: float = Field(0.3, ge=0)
     allow_unknown: bool = True  # [tb3] GridBased.allow_unknown
     # [nav2] NavFn GridBased.tolerance: an occupied goal is replaced by the nearest plannable
     # cell within this (square) distance; only beyond it does planning fail (GOAL_OCCUPIED)

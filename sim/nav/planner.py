@@ -108,6 +108,7 @@ class GridPlanner:
         self._labels: tuple[tuple[int, bool], np.ndarray] | None = None
         self._relaxed_w: tuple[int, np.ndarray, np.ndarray] | None = None
         self.last: PlanResult | None = None
+        self._halo: tuple[int, np.ndarray | None] | None = None
         inf = costmap.inflator  # the cost of a cell pinch_margin beyond the inscribed radius
         self._pinch_cost = int(inflation_cost(inf.inscribed_radius + self.params.pinch_margin,
                                               inf.inscribed_radius, inf.inflation_radius,
@@ -120,12 +121,32 @@ class GridPlanner:
         w = 1.0 + self.params.cost_penalty * c / 252.0
         if self.params.pinch_penalty > 0 and self.params.pinch_margin > 0:
             w[(cost >= self._pinch_cost) & (cost < INSCRIBED)] += self.params.pinch_penalty
+        halo = self._mark_halo()
+        if halo is not None:
+            w += halo
         w[(cost == INSCRIBED) | (cost == LETHAL)] = np.inf
         unknown = cost == NO_INFORMATION
         w[unknown] = 1.0 if allow_unknown else np.inf
         out = np.full((self.Hp, self.Wp), np.inf)
         out[1:-1, 1:-1] = w
         return out.ravel()
+
+    def _mark_halo(self) -> np.ndarray | None:
+        """Extra weight near the map-update layer (``add_obstacle``: the collision marks), falling
+        from ``mark_penalty`` at the inscribed radius to 0 at ``mark_halo`` m beyond it; None
+        without marks. A mark is where a touch was sensed, not the obstacle's outline: a plan that
+        can keep a wider berth does, so it does not touch the unsensed rest of the obstacle."""
+        p, cm = self.params, self.costmap
+        if p.mark_penalty <= 0 or p.mark_halo <= 0:
+            return None
+        key = cm.base_version
+        if self._halo is None or self._halo[0] != key:
+            extra = None
+            if cm.updates.any():
+                d = ndimage.distance_transform_edt(~cm.updates) * cm.resolution - cm.inscribed_radius
+                extra = np.clip(1.0 - d / p.mark_halo, 0.0, 1.0) * p.mark_penalty
+            self._halo = (key, extra)
+        return self._halo[1]
 
     def _master_weights(self) -> np.ndarray:
         cm = self.costmap

@@ -629,6 +629,12 @@ class NavStack:
             self.local_costmap.recompose()
         log.info("nav_obstacle_added", x=x, y=y, radius=radius, sim_time=self._sim_time())
 
+    async def clear_obstacles(self) -> None:
+        self.global_costmap.clear_updates()
+        if self.local_costmap._placed:
+            self.local_costmap.recompose()
+        log.info("nav_obstacles_cleared", sim_time=self._sim_time())
+
     def is_path_valid(self, path: Path, max_cost: int = 253) -> bool:
         if not self.components[PLANNER].alive:
             return False

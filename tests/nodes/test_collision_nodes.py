@@ -163,3 +163,33 @@ async def test_a_slow_rosbot_touch_is_sensed_from_imu_and_wheels_not_from_the_sp
     else:
         assert direction is None
     await rt.stop()
+
+
+async def test_marks_that_close_the_only_door_are_relaxed_to_what_was_sensed(runtime):
+    """A mark is wider than the touch that made it (margins, the far-side extension); beside a
+    doorway that can close the only way the obstacle itself leaves. RelaxCollisionMarks shrinks
+    every mark to its core and marks the map again: the plan through the door exists again.
+    Each mark is relaxed once: a second call has nothing to do and fails."""
+    from bt_runtime.runtime.messages import NavErrorCode
+    from nodes.contact import ObstacleMarks
+
+    rt = await runtime(tree_xml('<Sequence><Delay delay_msec="500"><RelaxCollisionMarks/></Delay>'
+                                '<Delay delay_msec="500"><Inverter><RelaxCollisionMarks/></Inverter></Delay>'
+                                '<Script code="relaxed := true"/></Sequence>'))
+    nav = rt.driver.navigation
+    marks = marks_of(rt.context)
+    assert isinstance(marks, ObstacleMarks)
+    # the apartment's door at x -6.76..-5.86 in the wall at y 0.85..1.0
+    wide = [(x / 100, 0.6) for x in range(-680, -579, 10)]
+    marks.place(wide, 0.1, 0.3, core=[(-6.3, 0.6, 0.05), (-6.3, 0.65, 0.05)])
+    for x, y in wide:
+        await nav.add_obstacle(x, y, 0.1)
+    start, goal = Pose2D(-6.3, -1.0, 1.57), Pose2D(-6.3, 2.0, 1.57)
+    before = await nav.compute_path_to_pose(goal, start=start, use_start=True)
+    assert before.error_code == NavErrorCode.NO_VALID_PATH
+    await asyncio.sleep(2.0)
+    assert rt.tree.root_blackboard.get("relaxed")
+    assert marks.marks[0].discs == [(-6.3, 0.6, 0.05), (-6.3, 0.65, 0.05)]
+    after = await nav.compute_path_to_pose(goal, start=start, use_start=True)
+    assert after.error_code == NavErrorCode.NONE
+    await rt.stop()

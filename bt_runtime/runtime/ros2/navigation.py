@@ -298,6 +298,10 @@ class Ros2Navigation:
             "Options: an extra observation source of the obstacle layer fed with a PointCloud2, a "
             "keepout filter mask, or an updated map from map_server (see docs/ros2.md)")
 
+    async def clear_obstacles(self) -> None:
+        raise NotImplementedError("clear_obstacles is not available on real Nav2 (no add_obstacle either; "
+                                  "see docs/ros2.md)")
+
     # -- costmap queries (from the global costmap topic) ------------------------------------------
     def _on_costmap(self, samples: list, _now: float) -> None:
         m = samples[-1]

@@ -237,3 +237,23 @@ def test_a_plan_keeps_a_margin_beyond_the_inscribed_radius_where_the_map_leaves_
     assert _door_used(res) == pytest.approx(3.0, abs=0.1)
     roomy = make(_two_doors(0.6, wide=True)).plan(s, g)  # 0.19 m beyond the inscribed radius
     assert roomy.ok and _door_used(roomy) == pytest.approx(3.0, abs=0.1)
+
+
+def test_a_plan_keeps_a_wider_berth_from_collision_marks_where_it_can():
+    """A collision mark covers where a touch was sensed, not the whole obstacle: a plan through
+    a 1 m door with a mark near one jamb passes further from the mark than the inflation alone
+    would keep it, and still passes a mark when that is the only way."""
+    s, g = Pose2D(2.0, 3.0), Pose2D(6.0, 3.0)
+
+    def berth(planner) -> float:
+        planner.costmap.add_obstacle(4.0, 3.3, 0.05)
+        res = planner.plan(s, g)
+        assert res.ok
+        return float(np.min(np.hypot(res.points[:, 0] - 4.0, res.points[:, 1] - 3.3)) - 0.05)
+
+    plain = berth(make(_two_doors(1.0, wide=False), mark_penalty=0.0))
+    wide = berth(make(_two_doors(1.0, wide=False)))
+    assert wide > plain + 0.03, (plain, wide)
+    narrow = make(_two_doors(0.6, wide=False))  # a mark in the only door leaves 0.25 m beside it
+    narrow.costmap.add_obstacle(4.0, 3.2, 0.05)
+    assert_valid_path(narrow, narrow.plan(s, g), s, g)
