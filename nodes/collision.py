@@ -306,7 +306,7 @@ class MarkObstacle(AsyncActionNode):
         ctx = self.context
         radius = self.get_input("radius")
         arc = self.get_input("arc", None)
-        core = None
+        core = touch = None
         if isinstance(arc, ContactArc):
             depth = self.get_input("depth")
             points = arc.chord(arc.radius + radius, self.get_input("margin"), self.get_input("outward"))
@@ -320,10 +320,11 @@ class MarkObstacle(AsyncActionNode):
                 points = _clear_of(points, pose, ctx.robot.radius + radius)
                 core_points = _clear_of(core_points, pose, ctx.robot.radius + core_r)
             core = [(x, y, core_r) for x, y in core_points]
+            touch = [(*arc.point_at(arc.bearing, arc.radius + core_r), core_r)]
         else:
             point = self.get_input("point")
             points = [(point.x, point.y)]
-        index, discs = marks_of(ctx).place(points, radius, self.get_input("merge_distance"), core)
+        index, discs = marks_of(ctx).place(points, radius, self.get_input("merge_distance"), core, touch)
         for x, y, r in discs:
             await ctx.navigation.add_obstacle(x, y, r)
         self.set_output("mark", index)
@@ -337,12 +338,13 @@ def _clear_of(points: list[tuple[float, float]], pose: Pose2D, keep: float) -> l
 
 
 class RelaxCollisionMarks(AsyncActionNode):
-    """Shrink the collision marks to what was sensed (``Mark.core``: the touched arc and the
-    body behind it, without the margins and the far-side extension) when a plan finds no way:
-    a mark is wider than what the robot touched, and beside a doorway or in a passage the margin
-    can close the only way to the goal that the obstacle itself leaves open. The map is marked
-    again from the shrunk marks. Each mark is relaxed once (a mark that grows after a new touch
-    can be relaxed again). FAILURE when there was nothing to relax (no marks, or all relaxed),
+    """Shrink the collision marks one stage when a plan finds no way: first to what was sensed
+    (``Mark.core``: the touched arc and the body behind it, without the margins and the far-side
+    extension), at the next call to a small disc at each touch's middle (``Mark.touch``). A mark
+    is wider than what the robot touched, and beside a doorway or in a passage its margin can
+    close the only way that the obstacle itself leaves open; the smallest stage lets the robot
+    probe the way again (a new touch grows the mark back). The map is marked again from the
+    shrunk marks. FAILURE when there was nothing to relax (no marks, or all at their smallest),
     so the caller goes on to its other ways of handling "no path"."""
 
     async def run(self):

@@ -105,13 +105,15 @@ def segments_arc(spans: tuple[tuple[float, float], ...], pressed: tuple[int, ...
 
 @dataclass(slots=True)
 class Mark:
-    """One obstacle as marked in the map: the discs sent to navigation (``discs``) and its
-    *core*, the discs over what was sensed alone (the touched arc and the body behind it, no
-    margins): what stays when the mark is relaxed because it closes the only way."""
+    """One obstacle as marked in the map: the discs sent to navigation (``discs``), its *core*,
+    the discs over what was sensed alone (the touched arc and the body behind it, no margins),
+    and its *touch*, a disc at each sensed contact's middle: what stays when the mark is relaxed
+    once, then twice, because it closes the only way (``stage`` 0, 1, 2)."""
 
     discs: list[tuple[float, float, float]] = field(default_factory=list)  # (x, y, radius)
     core: list[tuple[float, float, float]] = field(default_factory=list)
-    relaxed: bool = False
+    touch: list[tuple[float, float, float]] = field(default_factory=list)
+    stage: int = 0
 
     def distance_to(self, x: float, y: float) -> float:
         return min(math.hypot(x - dx, y - dy) - r for dx, dy, r in self.discs)
@@ -124,11 +126,12 @@ class ObstacleMarks:
         self.marks: list[Mark] = []
 
     def place(self, points: list[tuple[float, float]], radius: float, merge_distance: float,
-              core: list[tuple[float, float, float]] | None = None) -> tuple[int, list[tuple[float, float, float]]]:
+              core: list[tuple[float, float, float]] | None = None,
+              touch: list[tuple[float, float, float]] | None = None) -> tuple[int, list[tuple[float, float, float]]]:
         """Add discs of ``radius`` at ``points``: to the mark that lies within
         ``merge_distance`` of any of them (that mark grows), else as a new mark; ``core`` (the
-        discs over what was sensed alone) joins the mark's core. Returns the mark's index and
-        the discs that are new."""
+        discs over what was sensed alone) and ``touch`` (the contact's middle) join the mark's.
+        Returns the mark's index and the discs that are new."""
         target = None
         for i, mark in enumerate(self.marks):
             if any(mark.distance_to(x, y) <= merge_distance + radius for x, y in points):
@@ -142,20 +145,23 @@ class ObstacleMarks:
                if not any(math.hypot(x - dx, y - dy) < 0.5 * radius for dx, dy, _ in mark.discs)]
         mark.discs.extend(new)
         mark.core.extend(core if core is not None else [(x, y, radius) for x, y in points])
+        mark.touch.extend(touch if touch is not None else mark.core[-1:])
         if new:
-            mark.relaxed = False
+            mark.stage = 0
         return target, new
 
     def relax(self) -> bool:
-        """Shrink every mark not yet relaxed to its core. True if any mark changed (then the
-        map must be marked again from ``discs()``)."""
+        """Shrink every mark one stage: to its core, then to its touches. True if any mark
+        changed (then the map must be marked again from ``discs()``)."""
         changed = False
         for mark in self.marks:
-            if not mark.relaxed:
-                mark.relaxed = True
-                if mark.core and mark.core != mark.discs:
-                    mark.discs = list(mark.core)
+            while mark.stage < 2:
+                mark.stage += 1
+                smaller = mark.core if mark.stage == 1 else mark.touch
+                if smaller and smaller != mark.discs:
+                    mark.discs = list(smaller)
                     changed = True
+                    break
         return changed
 
     def discs(self) -> list[tuple[float, float, float]]:

@@ -168,28 +168,39 @@ async def test_a_slow_rosbot_touch_is_sensed_from_imu_and_wheels_not_from_the_sp
 async def test_marks_that_close_the_only_door_are_relaxed_to_what_was_sensed(runtime):
     """A mark is wider than the touch that made it (margins, the far-side extension); beside a
     doorway that can close the only way the obstacle itself leaves. RelaxCollisionMarks shrinks
-    every mark to its core and marks the map again: the plan through the door exists again.
-    Each mark is relaxed once: a second call has nothing to do and fails."""
+    every mark to its core and marks the map again: the plan through the door exists again."""
     from bt_runtime.runtime.messages import NavErrorCode
-    from nodes.contact import ObstacleMarks
 
     rt = await runtime(tree_xml('<Sequence><Delay delay_msec="500"><RelaxCollisionMarks/></Delay>'
-                                '<Delay delay_msec="500"><Inverter><RelaxCollisionMarks/></Inverter></Delay>'
                                 '<Script code="relaxed := true"/></Sequence>'))
     nav = rt.driver.navigation
     marks = marks_of(rt.context)
-    assert isinstance(marks, ObstacleMarks)
     # the apartment's door at x -6.76..-5.86 in the wall at y 0.85..1.0
     wide = [(x / 100, 0.6) for x in range(-680, -579, 10)]
-    marks.place(wide, 0.1, 0.3, core=[(-6.3, 0.6, 0.05), (-6.3, 0.65, 0.05)])
+    core = [(-6.3, 0.6, 0.05), (-6.3, 0.65, 0.05)]
+    marks.place(wide, 0.1, 0.3, core=core, touch=core[:1])
     for x, y in wide:
         await nav.add_obstacle(x, y, 0.1)
     start, goal = Pose2D(-6.3, -1.0, 1.57), Pose2D(-6.3, 2.0, 1.57)
     before = await nav.compute_path_to_pose(goal, start=start, use_start=True)
     assert before.error_code == NavErrorCode.NO_VALID_PATH
-    await asyncio.sleep(2.0)
+    await asyncio.sleep(1.5)
     assert rt.tree.root_blackboard.get("relaxed")
-    assert marks.marks[0].discs == [(-6.3, 0.6, 0.05), (-6.3, 0.65, 0.05)]
+    assert marks.marks[0].discs == core
     after = await nav.compute_path_to_pose(goal, start=start, use_start=True)
     assert after.error_code == NavErrorCode.NONE
     await rt.stop()
+
+
+def test_a_mark_relaxes_to_its_core_then_to_its_touches_and_grows_back_on_a_new_touch():
+    from nodes.contact import ObstacleMarks
+
+    marks = ObstacleMarks()
+    core, touch = [(0.0, 0.0, 0.05), (0.05, 0.0, 0.05)], [(0.0, 0.0, 0.05)]
+    marks.place([(0.0, 0.0), (0.1, 0.0), (0.2, 0.0)], 0.1, 0.3, core=core, touch=touch)
+    assert marks.relax() and marks.marks[0].discs == core
+    assert marks.relax() and marks.marks[0].discs == touch
+    assert not marks.relax()  # nothing smaller left
+    _, new = marks.place([(0.0, 0.2)], 0.1, 0.3, core=[(0.0, 0.15, 0.05)], touch=[(0.0, 0.15, 0.05)])
+    assert new and marks.marks[0].stage == 0 and len(marks.marks) == 1
+    assert marks.relax() and marks.marks[0].discs == core + [(0.0, 0.15, 0.05)]
