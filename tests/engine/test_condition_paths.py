@@ -107,3 +107,38 @@ def test_nodes_sharing_conditions_each_use_their_own_blackboard(attrs: str) -> N
     assert tree.tick_exactly_once() is NodeStatus.SUCCESS
     bb = tree.root_blackboard
     assert (bb.get("ran_off"), bb.get("ran_on")) == (1, 0)
+
+
+_FLAG_VALUES = {"missing": None, "zero": 0.0, "one": 1.0, "negative": -2.0, "nan": float("nan"), "int": 3,
+                "string": "true", "bool": True}
+
+
+@pytest.mark.parametrize("attr", ["_skipIf", "_failureIf", "_successIf", "_while"])
+@pytest.mark.parametrize("code", ["flag", "!flag"])
+@pytest.mark.parametrize("value", list(_FLAG_VALUES))
+@pytest.mark.parametrize("shadowed", [False, True])
+def test_a_check_reading_one_variable_gives_what_the_full_tick_gives(attr, code, value, shadowed) -> None:
+    """condition_tick reads a double for 'flag' / '!flag' itself: every kind of entry (and a
+    scripting enum of that name) gives the status, or the error, that the full executeTick
+    path (taken by a node with a hook) gives."""
+    def outcome(hooked: bool):
+        f = BehaviorTreeFactory()
+        f.register_simple_action("Act", lambda node: NodeStatus.SUCCESS)
+        if shadowed:
+            f.register_scripting_enum("flag", 1)
+        tree = f.create_tree_from_text(f'<root BTCPP_format="4"><BehaviorTree ID="M"><Sequence>'
+                                       f'<Act {attr}="{code}"/></Sequence></BehaviorTree></root>')
+        if _FLAG_VALUES[value] is not None:
+            tree.root_blackboard.set("flag", _FLAG_VALUES[value])
+        node = tree.root_node.children[0]
+        if hooked:
+            node.set_pre_tick_function(lambda n: None)
+        seen = []
+        for _ in range(2):
+            try:
+                seen.append(tree.tick_exactly_once().name)
+            except BehaviorTreeException as exc:
+                seen.append(f"{type(exc).__name__}: {exc}")
+        return seen
+
+    assert outcome(False) == outcome(True)
