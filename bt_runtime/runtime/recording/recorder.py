@@ -52,7 +52,9 @@ class Recorder:
         # live view only ('states'): the tree's statuses sampled at the viewing rate, not after every tick
         self._tree_period = 0.0
         self._tree_next = -1e18
-        self._last_output: tuple[Any, str] | None = None
+        self._tick_callback: Callable[[Any], None] | None = None
+        self._last_output: tuple[float, float, str] | None = None
+        self._repeat_s = self.options.cmd_vel_repeat_s
         self._last_output_t = -1e18
         self._switches_seen = 0
         self._map_version: int | None = None
@@ -92,8 +94,9 @@ class Recorder:
             opts = self.options
             if getattr(self.pipeline, "bag", None) is None and opts.live_rate_hz > 0 and opts.tree_log == "states":
                 self._tree_period = 1.0 / opts.live_rate_hz  # a pass over every node costs ~5-8 us a tick
-            if rt.tick_loop is not None:
-                rt.tick_loop.on_tick.append(self._on_tick)
+            if rt.tick_loop is not None:  # one callback a tick, the cheapest that does the job
+                self._tick_callback = self._on_tick_sampled if self._tree_period else self.tree_log.after_tick
+                rt.tick_loop.on_tick.append(self._first_tick if rt.realtime else self._tick_callback)
         if topics.tf_static:
             put("tf_static", topics.tf_static, clock(), self.hooks.laser_offset)
         self._check_map()
@@ -155,8 +158,9 @@ class Recorder:
         if rt.gate.on_output == self._on_gate_output:
             rt.gate.on_output = self._previous_on_output
         if rt.tick_loop is not None:
-            with contextlib.suppress(ValueError):
-                rt.tick_loop.on_tick.remove(self._on_tick)
+            for callback in (self._first_tick, self._tick_callback):
+                with contextlib.suppress(ValueError):
+                    rt.tick_loop.on_tick.remove(callback)
         for task in (self._task, self._drain_task):
             if task is not None:
                 task.cancel()
@@ -166,13 +170,13 @@ class Recorder:
 
     # -- callbacks (event loop) --------------------------------------------------------------------
     def _on_gate_output(self, now: float, twist: Any, source: str) -> None:
-        put, topics = self.pipeline.put, self.options.topics
         if self._previous_on_output is not None:
             self._previous_on_output(now, twist, source)
-        key = (twist, source)
-        if key == self._last_output and now - self._last_output_t < self.options.cmd_vel_repeat_s:
+        key = (twist.linear, twist.angular, source)  # floats and a str: cheaper to compare than Twists
+        if now - self._last_output_t < self._repeat_s and key == self._last_output:
             return  # the gate republishes its decision after every tick: keep changes and a heartbeat
         self._last_output, self._last_output_t = key, now
+        put, topics = self.pipeline.put, self.options.topics
         if topics.cmd_vel:
             put("command", topics.cmd_vel, now, twist)
         own = GATE_SOURCE_TOPIC.get(source)  # gate inputs (teleop, joystick...) are recorded from their streams
@@ -190,16 +194,22 @@ class Recorder:
         if self.attached:  # the supervisor has no remove_listener: a detached recorder ignores it
             self.pipeline.put("supervisor_event", self.options.topics.supervisor_events, event.t, event)
 
-    def _on_tick(self, _status: Any) -> None:
-        if self.pipeline.tick_guard is None and self.runtime.realtime:
-            rt = self.runtime  # the loop's clock is time.monotonic in real time
-            self.pipeline.tick_guard = (rt.clock(), 1.0 / rt.config.tick.rate_hz)
-        if self._tree_period:
-            now = self.clock()
-            if now < self._tree_next:
-                return
+    def _first_tick(self, status: Any) -> None:
+        """Real time: the first tick gives the writer the ticks' phase (it keeps out of their
+        way), then hands its place in ``on_tick`` to the tree log's callback."""
+        rt = self.runtime  # the loop's clock is time.monotonic in real time
+        self.pipeline.tick_guard = (rt.clock(), 1.0 / rt.config.tick.rate_hz)
+        callbacks = rt.tick_loop.on_tick
+        with contextlib.suppress(ValueError):
+            callbacks[callbacks.index(self._first_tick)] = self._tick_callback
+        self._tick_callback(status)
+
+    def _on_tick_sampled(self, _status: Any) -> None:
+        """Live view only: the tree's statuses at the viewing rate."""
+        now = self.clock()
+        if now >= self._tree_next:
             self._tree_next = now + self._tree_period
-        self.tree_log.after_tick()
+            self.tree_log.after_tick()
 
     def _put_tree_log(self, events: list[tuple[float, Any, Any, Any]]) -> None:
         self.pipeline.put("tree_log", self.options.topics.behavior_tree_log, self.clock(), events)

@@ -37,7 +37,8 @@ class TreeStateLog:
         self.clock = clock
         self.emit = emit
 
-    def after_tick(self) -> None:
+    def after_tick(self, _root: Any = None) -> None:
+        """Also the tick loop's ``on_tick`` callback itself (its argument, the root's status, unused)."""
         now = list(map(_status, self.cells))
         if now == self.last:
             return
@@ -67,7 +68,7 @@ class TreeTransitionLog:
     def _on_status(self, stamp: float, node: Any, previous: Any, new: Any) -> None:
         self.events.append((stamp, node, previous, new))  # names are looked up off the loop
 
-    def after_tick(self) -> None:
+    def after_tick(self, _root: Any = None) -> None:
         if self.events:
             self.flush()
 
