@@ -155,8 +155,6 @@ class TreeBuilder:
             raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
         if name is None:
             name = type_id
-        elif len(items) == 1:  # just a name: no port pass (the common case after no attributes)
-            attrs = None
         # (every forbidden character is unprintable; isprintable() costs far less than the search)
         if not name.isprintable() and _BAD_INSTANCE_CHAR.search(name) is not None:
             bad = self._check_instance_name(name)

@@ -38,7 +38,7 @@ _PORT_TAGS = {"input_port": PortDirection.INPUT, "output_port": PortDirection.OU
 # What the builder needs of one element, read from lxml once when the document is checked (a
 # SubTree used in many places is expanded as often; lxml calls cost 0.1-0.3 us each):
 # (tag, type ID (a SubTree's ID), name attribute or None, attribute items, attributes as a dict
-# or None when there are none, pre/post-condition attributes in BT.CPP's order, lxml sourceline
+# or None when there are none (for a node other than a SubTree: none but reserved ones), pre/post-condition attributes in BT.CPP's order, lxml sourceline
 # (what a node keeps for its line), children's plans, the element itself for error messages).
 # Never mutated.
 ElementPlan = tuple[str, str, "str | None", tuple, "dict[str, str] | None", tuple, "int | None", tuple,
@@ -293,8 +293,14 @@ class TreeRegistry:
             attrs = dict(items)
             get = attrs.get
             name = get("name")
-            conditions = (() if _CONDITION_ATTRIBUTE_SET.isdisjoint(attrs)
-                          else tuple((a, attrs[a]) for a in CONDITION_ATTRIBUTES if a in attrs))
+            if _CONDITION_ATTRIBUTE_SET.isdisjoint(attrs):
+                conditions = ()
+            else:  # (a loop, not a generator: one frame fewer per element)
+                conditions = []
+                for a in CONDITION_ATTRIBUTES:
+                    if a in attrs:
+                        conditions.append((a, attrs[a]))
+                conditions = tuple(conditions)
         else:
             items = conditions = ()
             attrs = name = None
@@ -348,6 +354,8 @@ class TreeRegistry:
             plans = tuple(plans)
         else:
             plans = ()
+        if attrs is not None and RESERVED_ATTRIBUTES.issuperset(attrs):
+            attrs = None  # only a name, conditions...: the builder has no port pass to make
         return (tag, type_id, name, items, attrs, conditions, elem.sourceline, plans, elem)
 
     def _check_reactive_children(self, doc: XMLDocument, elem: etree._Element,
