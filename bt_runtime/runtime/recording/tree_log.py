@@ -2,8 +2,8 @@
 
 * ``states`` (default): after every tick, the nodes whose status differs from their status
   after the previous tick, as ``previous -> current`` events. One pass over the nodes' status
-  cells per tick (a C-level ``map``), no callback on the tick path: 8-18 us a tick for the
-  autonomy tree's 121 nodes. What it does not show: a node that ran and went back to IDLE within one tick (a condition checked
+  cells per tick, no callback on the tick path: ~3.5 us a tick for the autonomy tree's 137
+  nodes (7.5 us with ``map(attrgetter)``). What it does not show: a node that ran and went back to IDLE within one tick (a condition checked
   and reset by its parent in the same tick), exactly as Groot2's sampled monitor.
 * ``changes``: every status transition, as Nav2's ``RosTopicLogger`` publishes them, through a
   status observer on every node; a tick whose transitions repeat the previous tick's exactly is
@@ -23,7 +23,6 @@ from typing import Any
 from ...status import IDLE
 
 Events = list[tuple[float, Any, Any, Any]]
-_status = attrgetter("status")
 _cell = attrgetter("_cell")  # the node's status cell (node.py): a slot read, where node.status is a property
 
 
@@ -39,7 +38,8 @@ class TreeStateLog:
 
     def after_tick(self, _root: Any = None) -> None:
         """Also the tick loop's ``on_tick`` callback itself (its argument, the root's status, unused)."""
-        now = list(map(_status, self.cells))
+        # a comprehension: CPython 3.11 specializes the slot read, ~2x faster than map(attrgetter)
+        now = [cell.status for cell in self.cells]
         if now == self.last:
             return
         last, nodes = self.last, self.nodes
