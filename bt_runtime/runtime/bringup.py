@@ -125,6 +125,18 @@ async def transition(driver: BringupDriver, node: str, step: int, timeout: float
     raise BringupError(f"{label} {why}; the node is {state_label(state)}")
 
 
+def _no_answer(driver: BringupDriver, node: str, waited: float) -> str:
+    """Why get_state got nothing: its service never showed up, or it did and kept silent (a
+    driver that can tell offers ``node_found(node)``)."""
+    found = getattr(driver, "node_found", None)
+    if callable(found) and found(node):
+        return (f"its lifecycle service {node}/get_state was found but did not answer within {waited:g} s "
+                "(a hung or overloaded node? docs/ros2.md)")
+    where = "was not found" if callable(found) else "did not answer"
+    return (f"its lifecycle services ({node}/get_state) {where} within {waited:g} s (is it running, on this "
+            "domain and namespace, with an RMW whose services we speak? docs/ros2.md)")
+
+
 async def bring_up(driver: BringupDriver, plan: BringupPlan, clock: Callable[[], float],
                    on_node: Callable[[NodeOutcome, str], Awaitable[None] | None] | None = None,
                    report: BringupReport | None = None) -> BringupReport:
@@ -153,10 +165,8 @@ async def bring_up(driver: BringupDriver, plan: BringupPlan, clock: Callable[[],
                 state = await _settled_state(driver, outcome.node,
                                              plan.service_timeout if first else plan.transition_timeout, clock)
                 if state is None:
-                    raise BringupError(f"its lifecycle services ({outcome.node}/get_state) did not answer "
-                                       f"within {plan.service_timeout if first else plan.transition_timeout:g} s "
-                                       "(is it running, on this domain and namespace, with an RMW whose "
-                                       "services we speak? docs/ros2.md)")
+                    raise BringupError(_no_answer(driver, outcome.node,
+                                                  plan.service_timeout if first else plan.transition_timeout))
                 if state == FINALIZED:
                     raise BringupError("it is finalized (shut down): restart its process")
                 if phase == "configure" and state == UNCONFIGURED:

@@ -320,6 +320,7 @@ class ServiceClient:
                      else self.writer.get_guid().bytes)
         self._seq = itertools.count(1)
         self._pending: dict[int, asyncio.Future] = {}
+        self.resent = 0  # requests sent again for want of a reply (``call(resend=...)``)
 
     def ready(self) -> bool:
         """Both directions matched with a server."""
@@ -349,9 +350,15 @@ class ServiceClient:
         """Send ``request`` (the body type) with request id (our guid, ``seq``)."""
         self.writer.write(idl.wrap(self.guid, seq, request, self.mapping, "request"))
 
-    async def call(self, request: Any, timeout: float = 2.0) -> Any:
+    async def call(self, request: Any, timeout: float = 2.0, *, resend: float | None = None) -> Any:
         """Send ``request`` (the body type) and return the response body; ServiceError on
-        time-out (including the time to discover the server)."""
+        time-out (including the time to discover the server).
+
+        ``resend``: send the request again (same id; the first reply wins) every ``resend`` s
+        while no reply came, for requests that may be repeated (get_state). A ROS 2 server drops
+        its reply when it has not yet matched the client's reply reader (rmw_cyclonedds waits
+        100 ms for it, rmw_send_response), which our ``ready()`` cannot see from this side: sent
+        once, such a request costs the whole timeout."""
         loop = self.node.loop
         deadline = loop.time() + timeout
         if not self.ready() and not await self.wait_ready(timeout):
@@ -360,10 +367,15 @@ class ServiceClient:
         fut = loop.create_future()
         self._pending[seq] = fut
         try:
-            self.write_request(seq, request)
-            return await asyncio.wait_for(fut, max(0.0, deadline - loop.time()))
-        except TimeoutError:
-            raise ServiceError(f"service {self.name}: no reply within {timeout} s") from None
+            while True:
+                self.write_request(seq, request)
+                left = deadline - loop.time()
+                await asyncio.wait((fut,), timeout=max(0.0, left if resend is None else min(left, resend)))
+                if fut.done():
+                    return fut.result()
+                if loop.time() >= deadline:
+                    raise ServiceError(f"service {self.name}: no reply within {timeout:g} s")
+                self.resent += 1
         finally:
             self._pending.pop(seq, None)
 

@@ -52,6 +52,7 @@ RESTART_SEQUENCE = {  # from the current primary state back to active
 }
 TRANSITION_LABELS = {T.TRANSITION_CONFIGURE: "configure", T.TRANSITION_CLEANUP: "cleanup",
                      T.TRANSITION_ACTIVATE: "activate", T.TRANSITION_DEACTIVATE: "deactivate"}
+GET_STATE_RESEND = 0.5  # s: a get_state without reply is sent again (bring-up, restarts; not the polls)
 
 
 class Ros2Driver:
@@ -425,11 +426,16 @@ class Ros2Driver:
     async def node_state(self, node: str, timeout: float) -> int | None:
         if self.node is None:
             return None
-        try:
-            response = await self._node_clients(node)[0].call(idl.GetState_Request(), timeout)
+        try:  # re-sent while unanswered: a reply the node dropped does not cost the whole timeout
+            response = await self._node_clients(node)[0].call(idl.GetState_Request(), timeout,
+                                                              resend=GET_STATE_RESEND)
         except dds.ServiceError:
             return None
         return int(response.current_state.id)
+
+    def node_found(self, node: str) -> bool:
+        """The node's get_state service is discovered (both directions matched), answered or not."""
+        return self.node is not None and self._node_clients(node)[0].ready()
 
     async def change_node_state(self, node: str, transition: int, timeout: float) -> bool | None:
         if self.node is None:
