@@ -132,7 +132,7 @@ def _no_answer(driver: BringupDriver, node: str, waited: float) -> str:
     if callable(found) and found(node):
         return (f"its lifecycle service {node}/get_state was found but did not answer within {waited:g} s "
                 "(a hung or overloaded node? docs/ros2.md)")
-    where = "was not found" if callable(found) else "did not answer"
+    where = "were not found" if callable(found) else "did not answer"
     return (f"its lifecycle services ({node}/get_state) {where} within {waited:g} s (is it running, on this "
             "domain and namespace, with an RMW whose services we speak? docs/ros2.md)")
 

@@ -94,7 +94,7 @@ async def test_a_found_node_that_never_answers_and_a_missing_one_fail_with_diffe
         report = await bring_up(driver, driver.bringup_plan(), loop.time)
         assert report.failed and "planner_server/get_state was found but did not answer within 1.5 s" in report.reason
         missing = await bring_up(driver, BringupPlan(("ghost_server",), {}, 1.0, 1.0), loop.time)
-        assert missing.failed and "(ghost_server/get_state) was not found within 1 s" in missing.reason
+        assert missing.failed and "(ghost_server/get_state) were not found within 1 s" in missing.reason
     finally:
         await driver.stop()
         robot.close()
