@@ -12,8 +12,9 @@ decorators over asynchronous (stateful) children, with halts between ticks.
 a reproducible test. Constructs where BT.CPP 4.8.2 (the oracle) and 4.10 (our reference)
 differ are left out: unparenthesised ``+ - * /`` chains, ``true``/``false``, numeric literals
 as SubTree ports, the bitwise operators (``~`` of NaN wraps to 2^63 and only 4.8.2 casts that
-back), decimals compared by Switch against integers (4.8.2 accepts trailing junk), and strings
-that only the wheel's ``std::stod`` parses (leading ``+``, spaces, hex).
+back), decimals compared by Switch against integers (4.8.2 accepts trailing junk), strings
+that only the wheel's ``std::stod`` parses (leading ``+``, spaces, hex), a RUNNING child under
+SkipUnlessUpdated when it is halted, and a Repeat count a script can set to -1 (endless).
 """
 
 from __future__ import annotations
@@ -129,7 +130,12 @@ class _Gen:
         cond = self.conditions(scope)
         name = self.name()
         kind = r.choice(["C", "A", "R", "R", "Script", "Script", "ScriptCondition", "SubTree", "SubTree",
-                         "SetBlackboard", "Ok", "Fail"])
+                         "SetBlackboard", "Ok", "Fail", "Unset", "Updated"])
+        if kind == "Unset":  # removes a local entry only; a remapped key is left alone
+            return f'<UnsetBlackboard name="{name}" key="{r.choice([self.var(scope), "k", "_t", "w"])}"{cond}/>'
+        if kind == "Updated":
+            entry = self.var(scope)
+            return f'<WasEntryUpdated name="{name}" entry="{r.choice([entry, "{" + entry + "}"])}"{cond}/>'
         if kind == "SubTree" and depth < 3:
             return self.subtree(scope, depth, name, cond)
         if kind in ("Script", "SubTree"):
@@ -208,15 +214,21 @@ class _Gen:
             return f"<{ctl}{cond}>{kids(1, 3)}</{ctl}>"
 
         dec = r.choice(["Inverter", "ForceSuccess", "ForceFailure", "KeepRunningUntilFailure", "Repeat",
-                        "RetryUntilSuccessful", "RunOnce", "Precondition", "Loop"])
+                        "RetryUntilSuccessful", "RunOnce", "Precondition", "Loop", "SkipUnlessUpdated"])
         child = self.node(scope, depth + 1)
         if dec == "Loop":  # an output port written through whatever the scope remaps
             kind, items = r.choice([("Int", ["1", "2", "-3"]), ("Double", ["0.5", "2", "1e1"]),
                                     ("String", ["a", "5", "x y"])])
             queue = ";".join(r.sample(items, r.randint(0, 3)))
             return f'<Loop{kind} queue="{queue}" value="{{{self.var(scope)}}}"{cond}>{child}</Loop{kind}>'
+        if dec == "SkipUnlessUpdated":
+            # a synchronous child only: 4.8.2's halt() leaves a RUNNING child running (4.10 halts it)
+            entry = self.var(scope)
+            child = f'<Script name="{self.name()}" code="{self.script(scope)}"/>'
+            return (f'<SkipUnlessUpdated entry="{r.choice([entry, "{" + entry + "}"])}"{cond}>{child}'
+                    "</SkipUnlessUpdated>")
         if dec == "Repeat":
-            cycles = r.choice(["-2", "0", "1", "2", "{c}" if scope.get("c") == "num" else "2"])
+            cycles = r.choice(["-2", "0", "1", "2"])  # not {c}: a script can make it -1 (endless)
             return f'<Repeat num_cycles="{cycles}"{cond}>{child}</Repeat>'
         if dec == "RetryUntilSuccessful":
             return f'<RetryUntilSuccessful num_attempts="{r.randint(0, 3)}"{cond}>{child}</RetryUntilSuccessful>'
@@ -243,5 +255,9 @@ def make_case(seed: int) -> Case:
     between = {}
     for step in r.sample(range(ticks), k=min(ticks, r.randint(0, 2))):
         between[step] = {"c": r.randint(0, 3), "sw": r.choice(["abc", "5", "x"])}
+        if r.random() < 0.3:  # a host write of another kind: converted, or refused, by set()
+            key, value = r.choice([("i", "7"), ("i", 2.0), ("i", 2.5), ("d", 3), ("d", "1.5"), ("s", 5),
+                                   ("n", 2.5), ("b", 0), ("b", "1"), ("c", True)])
+            between[step][key] = value
     return Case(f"scripted-{seed}", tree(body, extra), scripts=g.scripts, ticks=ticks, mode=modes,
                 halt_after=halts, setup=dict(SETUP), between=between, keys=dict(KEYS))

@@ -147,3 +147,20 @@ def test_subtree_literal_queue_feeds_a_loop(factory):
     assert tree.tick_while_running() is S
     assert tree.tick_while_running() is S
     assert tree.root_blackboard.get("log") == "1.000000 2.000000 3.000000 " * 2
+
+
+@pytest.mark.parametrize("decorator", ["SkipUnlessUpdated", "WaitValueUpdate"])
+def test_halting_skip_unless_updated_halts_its_running_child(factory, decorator):
+    """4.10's EntryUpdatedDecorator::halt() halts the child (4.8.2 only reset its own flag, so a
+    RUNNING child went on running after its parent was halted)."""
+    halted = []
+    factory.register_simple_stateful_action("Work", lambda n: R, lambda n: R, lambda n: halted.append(n.name))
+    tree = factory.create_tree_from_text(doc(
+        f'<ReactiveSequence><ScriptCondition code="go"/><{decorator} entry="e"><Work name="w"/></{decorator}>'
+        '</ReactiveSequence>'))
+    tree.root_blackboard.set("go", True)
+    tree.root_blackboard.set("e", 1)
+    assert tree.tick_once() is R
+    tree.root_blackboard.set("go", False)
+    assert tree.tick_once() is F
+    assert halted == ["w"]
