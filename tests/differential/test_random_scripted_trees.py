@@ -2,7 +2,7 @@
 run in bt_runtime and in BT.CPP 4.8.2: both engines must give the same trace.
 
 A failing seed reproduces with ``make_case(seed)``; keep it as a hand-written case in
-``cases.py`` once fixed. Outside the suite, seeds 0-20,000 agree as well.
+``cases.py`` once fixed. Outside the suite, seeds 0-45,000 agree as well.
 """
 
 from __future__ import annotations
