@@ -1,5 +1,6 @@
 """The runtime's messages as ROS 2 messages, on the writer thread: CDR bytes for the high-rate
-types (through ``layout.py``), rosbags typestore messages for the others.
+types (through ``layout.py``), and for the others plain tuples of their fields encoded by the
+compiled encoder (``cdr_encoder.py``; no rosbags message objects built per message).
 
 Each converter takes ``(state, topic, t, payload)`` and returns ``[(topic, typename, msg)]``
 (one input may give several outputs: an odometry message also gives the odom -> base_link
@@ -18,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .cdr_encoder import encoder
 from .config import Frames
 from .layout import Layout
 from .types import msg_class
@@ -57,6 +59,11 @@ EMPTY32 = np.zeros(0, np.float32)
 LOG_INFO, LOG_WARN, LOG_ERROR = 20, 30, 40
 
 Output = list[tuple[str, str, Any]]
+
+PATH_T, BATTERY_T, GRID_T = "nav_msgs/msg/Path", "sensor_msgs/msg/BatteryState", "nav_msgs/msg/OccupancyGrid"
+TF_T, TREE_LOG_T = "tf2_msgs/msg/TFMessage", "nav2_msgs/msg/BehaviorTreeLog"
+DIAG_T, LOG_T = "diagnostic_msgs/msg/DiagnosticArray", "rcl_interfaces/msg/Log"
+NO_CELLS = b""  # an empty float32[]
 
 
 def stamp(t: float) -> Any:
@@ -260,47 +267,49 @@ def _supply_status(m: Any) -> int:
 
 def battery(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     nan = math.nan
-    msg = BatteryState(header=Header(stamp=s.stamp(m.stamp), frame_id=s.frames.base), voltage=float(m.voltage),
-                       temperature=nan, current=-float(m.current), charge=nan,
-                       capacity=float(m.capacity_ah) if m.capacity_ah else nan,
-                       design_capacity=float(m.capacity_ah) if m.capacity_ah else nan,
-                       percentage=float(m.percentage) / 100.0,
-                       power_supply_status=_supply_status(m),
-                       power_supply_health=0, power_supply_technology=0, present=True,
-                       cell_voltage=EMPTY32, cell_temperature=EMPTY32, location="", serial_number="")
-    return [(topic, "sensor_msgs/msg/BatteryState", msg)]
+    capacity = float(m.capacity_ah) if m.capacity_ah else nan
+    msg = ((s.sec_ns(m.stamp), s.frames.base), float(m.voltage), nan, -float(m.current), nan, capacity, capacity,
+           float(m.percentage) / 100.0, _supply_status(m), 0, 0, True, NO_CELLS, NO_CELLS, "", "")
+    return [(topic, BATTERY_T, encoder(BATTERY_T)(msg))]
+
+
+def _pose_values(x: float, y: float, yaw: float) -> tuple:
+    """geometry_msgs/msg/Pose as the encoder's tuple."""
+    half = yaw / 2.0
+    return ((float(x), float(y), 0.0), (0.0, 0.0, math.sin(half), math.cos(half)))
 
 
 def plan(s: ConvertState, topic: str, t: float, m: Any) -> Output:
-    header = Header(stamp=s.stamp(m.stamp), frame_id=s.frames.map)
-    pts = np.asarray(m.points, dtype=np.float64)
+    header = (s.sec_ns(m.stamp), s.frames.map)
+    rows = np.asarray(m.points, dtype=np.float64).tolist()
+    n = len(rows)
     poses = []
-    for i, row in enumerate(pts):
+    yaw = 0.0  # the last point keeps the heading before it
+    for i, row in enumerate(rows):
         if len(row) > 2:
-            yaw = float(row[2])
-        elif i + 1 < len(pts):
-            yaw = math.atan2(pts[i + 1, 1] - row[1], pts[i + 1, 0] - row[0])
-        else:
-            yaw = poses[-1][2] if poses else 0.0
-        poses.append((float(row[0]), float(row[1]), yaw))
-    msg = Path(header=header, poses=[PoseStamped(header=header, pose=pose(*p)) for p in poses])
-    return [(topic, "nav_msgs/msg/Path", msg)]
+            yaw = row[2]
+        elif i + 1 < n:
+            nxt = rows[i + 1]
+            yaw = math.atan2(nxt[1] - row[1], nxt[0] - row[0])
+        half = yaw / 2.0
+        poses.append((header, ((row[0], row[1], 0.0), (0.0, 0.0, math.sin(half), math.cos(half)))))
+    return [(topic, PATH_T, encoder(PATH_T)((header, poses)))]
 
 
 def occupancy(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     h, w = m.data.shape
     ox, oy, oyaw = m.origin
-    msg = OccupancyGrid(header=Header(stamp=s.stamp(t), frame_id=s.frames.map),
-                        info=MapMetaData(map_load_time=s.stamp(t), resolution=float(m.resolution), width=int(w),
-                                         height=int(h), origin=pose(ox, oy, oyaw)),
-                        data=np.ascontiguousarray(m.data, dtype=np.int8).reshape(-1))
-    return [(topic, "nav_msgs/msg/OccupancyGrid", msg)]
+    when = s.sec_ns(t)
+    msg = ((when, s.frames.map), (when, float(m.resolution), int(w), int(h), _pose_values(ox, oy, oyaw)),
+           np.ascontiguousarray(m.data, dtype=np.int8).tobytes())
+    return [(topic, GRID_T, encoder(GRID_T)(msg))]
 
 
 def tf_static(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     x, y, yaw = m
-    tf = TFMessage(transforms=[transform(s.stamp(t), s.frames.base, s.frames.laser, x, y, yaw)])
-    return [(topic, "tf2_msgs/msg/TFMessage", tf)]
+    f = s.frames
+    tf = ([((s.sec_ns(t), f.base), f.laser, _pose_values(x, y, yaw))],)
+    return [(topic, TF_T, encoder(TF_T)(tf))]
 
 
 # -- commands -----------------------------------------------------------------------------------
@@ -319,9 +328,9 @@ def tree_log(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     for et, node, prev, cur in m:
         when = stamps.get(et)
         if when is None:
-            when = stamps[et] = s.stamp(et)
-        events.append(BehaviorTreeStatusChange(when, node.name, node.config.uid & 0xFFFF, prev.name, cur.name))
-    return [(topic, "nav2_msgs/msg/BehaviorTreeLog", BehaviorTreeLog(timestamp=s.stamp(t), event_log=events))]
+            when = stamps[et] = s.sec_ns(et)
+        events.append((when, node.name, node.config.uid & 0xFFFF, prev.name, cur.name))
+    return [(topic, TREE_LOG_T, encoder(TREE_LOG_T)((s.sec_ns(t), events)))]
 
 
 DIAG_LEVEL = {"ok": 0, "unknown": 3, "restarting": 1, "failed": 2, "dead": 2}
@@ -329,31 +338,29 @@ DIAG_LEVEL = {"ok": 0, "unknown": 3, "restarting": 1, "failed": 2, "dead": 2}
 
 def diagnostics(s: ConvertState, topic: str, t: float, m: Any) -> Output:
     """m: [(name, kind, state, age, restarts, failures)] of every supervised component."""
-    status = [DiagnosticStatus(level=DIAG_LEVEL.get(state, 3), name=f"supervisor: {name}",
-                               message=state, hardware_id=kind,
-                               values=[KeyValue(key="last_seen_age_s", value="" if age is None else f"{age:.3f}"),
-                                       KeyValue(key="restarts", value=str(restarts)),
-                                       KeyValue(key="failures", value=str(failures))])
+    status = [(DIAG_LEVEL.get(state, 3), f"supervisor: {name}", state, kind,
+               [("last_seen_age_s", "" if age is None else f"{age:.3f}"), ("restarts", str(restarts)),
+                ("failures", str(failures))])
               for name, kind, state, age, restarts, failures in m]
-    msg = DiagnosticArray(header=Header(stamp=s.stamp(t), frame_id=""), status=status)
-    return [(topic, "diagnostic_msgs/msg/DiagnosticArray", msg)]
+    return [(topic, DIAG_T, encoder(DIAG_T)(((s.sec_ns(t), ""), status)))]
 
 
-def log_line(s: ConvertState, t: float, level: int, name: str, text: str) -> Any:
-    return Log(stamp=s.stamp(t), level=level, name=name, msg=text, file="", function="", line=0)
+def log_line(s: ConvertState, t: float, level: int, name: str, text: str) -> bytes:
+    """rcl_interfaces/msg/Log, encoded."""
+    return encoder(LOG_T)((s.sec_ns(t), level, name, text, "", "", 0))
 
 
 def supervisor_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
     state = e.state.value
     level = LOG_WARN if state in ("failed", "dead") else LOG_INFO
     text = f"{e.component}: {e.previous.value} -> {state}" + (f" ({e.reason})" if e.reason else "")
-    return [(topic, "rcl_interfaces/msg/Log", log_line(s, e.t, level, "supervisor", text))]
+    return [(topic, LOG_T, log_line(s, e.t, level, "supervisor", text))]
 
 
 def gate_event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
     level = LOG_WARN if e.source in ("estop", "deadman", "lock") else LOG_INFO
     text = f"{e.previous} -> {e.source}: {e.reason}"
-    return [(topic, "rcl_interfaces/msg/Log", log_line(s, e.t, level, "gate", text))]
+    return [(topic, LOG_T, log_line(s, e.t, level, "gate", text))]
 
 
 # -- hook kinds ---------------------------------------------------------------------------------
@@ -375,7 +382,7 @@ def odometry_like(s: ConvertState, topic: str, t: float, m: Any) -> Output:
 
 def event(s: ConvertState, topic: str, t: float, e: Any) -> Output:
     text = f"{e.kind} " + json.dumps(e.data, default=str, sort_keys=True)
-    return [(topic, "rcl_interfaces/msg/Log", log_line(s, e.t, LOG_WARN, "sim", text))]
+    return [(topic, LOG_T, log_line(s, e.t, LOG_WARN, "sim", text))]
 
 
 CONVERTERS: dict[str, Callable[[ConvertState, str, float, Any], Output]] = {

@@ -63,8 +63,10 @@ def test_the_recording_store_makes_only_the_cdr_serializer_and_still_reads_back(
     imu = convert.imu(state, "/imu", 1.0, Imu(2.5, 0.3, 0.1, -0.2, yaw=1.0))[0]
     back = store.deserialize_cdr(imu[2], imu[1])  # deserializer made on first use
     assert back.angular_velocity.z == 0.3 and back.header.stamp.sec == 2
-    log = convert.log_line(state, 3.0, 20, "gate", "nav -> tree")
-    data = types.serialize(log, "rcl_interfaces/msg/Log")
+    data = convert.log_line(state, 3.0, 20, "gate", "nav -> tree")
+    assert store.deserialize_cdr(data, "rcl_interfaces/msg/Log").msg == "nav -> tree"
+    log = jazzy.deserialize_cdr(data, "rcl_interfaces/msg/Log")
+    assert types.serialize(log, "rcl_interfaces/msg/Log") == data  # rosbags' serializer, on first use
     assert data == jazzy.serialize_cdr(jazzy.deserialize_cdr(data, "rcl_interfaces/msg/Log"), "rcl_interfaces/msg/Log")
     assert store.get_msgdef("rcl_interfaces/msg/Log").size_ros1 == jazzy.get_msgdef("rcl_interfaces/msg/Log").size_ros1
 
@@ -76,8 +78,8 @@ def test_battery_keeps_the_monitors_charging_status():
     state = convert.ConvertState()
 
     def status(msg: BatteryState) -> int:
-        (_, _, out), = convert.battery(state, "/battery_state", 1.0, msg)
-        return out.power_supply_status
+        (_, typename, out), = convert.battery(state, "/battery_state", 1.0, msg)
+        return types.typestore().deserialize_cdr(out, typename).power_supply_status
 
     assert status(BatteryState(1.0, 12.0, 40.0, current=-2.0, power_supply_status=POWER_SUPPLY_CHARGING)) == 1
     assert status(BatteryState(1.0, 12.0, 40.0, current=1.5)) == 2  # no status given: drawing current
