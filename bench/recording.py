@@ -121,7 +121,13 @@ async def run_phase(config: str, folder: Path, duration: float) -> dict:
     bb = rt.tree.root_blackboard
     bb.set("goal", Pose2D(g.x, g.y, 0.0))
     bb.set("goal_status", "PENDING")
-    rec = {"baseline": None, "record": Recording(bag=folder)}.get(config, Recording(foxglove_port=0))
+    bag_configs = ("record", "record-nice10")
+    rec = None if config == "baseline" else Recording(bag=folder) if config in bag_configs else \
+        Recording(foxglove_port=0)
+    if config == "record-nice10":  # the writer thread at nice +10 (real time), as before
+        from bt_runtime.runtime.recording.pipeline import RecordPipeline
+
+        RecordPipeline.writer_nice = 10
     viewer = None
     c0 = time.process_time()
     if rec is not None:
@@ -135,6 +141,8 @@ async def run_phase(config: str, folder: Path, duration: float) -> dict:
     await asyncio.sleep(duration)
     await rt.stop()
     report = rec.stop() if rec is not None else {}
+    if config == "record-nice10":
+        RecordPipeline.writer_nice = 0
     cpu = time.process_time() - c0
     if viewer is not None:
         viewer.wait(30)
@@ -179,10 +187,11 @@ def inprocess(duration: float, rounds: int, configs: tuple[str, ...] = IN_PROCES
               f"ms  {rel}  {messages[name]} messages")
 
 
-def realtime_inprocess(seconds: float, pairs: int) -> None:
-    """Tick lateness in real time with and without --record, interleaved (the order alternates
-    each pair): p50, p99 and max of every run, the ticks later than 5 ms, and the recording's
-    longest segment-close step and drops."""
+def realtime_inprocess(seconds: float, pairs: int, configs: tuple[str, ...] = ("baseline", "record")) -> None:
+    """Tick lateness in real time with and without --record, interleaved (the order rotates
+    each round): p50, p99 and max of every run, the ticks later than 5 ms, and the recording's
+    longest segment-close step and drops. ``record-nice10``: --record with the writer thread
+    at nice +10 (the loop's priority is the default)."""
     import shutil
 
     import numpy as np
@@ -191,11 +200,12 @@ def realtime_inprocess(seconds: float, pairs: int) -> None:
     from bt_runtime.runtime.clock import run as run_loop
 
     quiet_logging("error")
-    rows: dict[str, list[dict]] = {"baseline": [], "record": []}
+    rows: dict[str, list[dict]] = {name: [] for name in configs}
     with tempfile.TemporaryDirectory() as tmp:
         run_loop(run_phase("record", Path(tmp) / "warm", 1.0), virtual=True)
         for r in range(pairs):
-            for name in (("baseline", "record") if r % 2 == 0 else ("record", "baseline")):
+            k = r % len(configs)
+            for name in configs[k:] + configs[:k]:
                 folder = Path(tmp) / f"{name}{r}"
                 out = run_loop(run_phase(name, folder, seconds), virtual=False)
                 late = out["lateness"] * 1e3
@@ -208,7 +218,7 @@ def realtime_inprocess(seconds: float, pairs: int) -> None:
                 print(f"  pair {r + 1} {name:<9} p50 {row['p50']:6.3f} ms  p99 {row['p99']:6.2f} ms  max "
                       f"{row['max']:6.1f} ms  >5 ms {row['over5']:3d}/{row['ticks']}  load {row['load']:5.1f}"
                       + (f"  {row['messages']} messages, dropped {row['dropped']}, longest close step "
-                         f"{row['flush_ms']:.2f} ms" if name == "record" else ""), flush=True)
+                         f"{row['flush_ms']:.2f} ms" if name != "baseline" else ""), flush=True)
                 shutil.rmtree(folder, ignore_errors=True)
     print(f"\nreal time, {seconds:g} s runs, {pairs} pairs (in process): median (min..max) over runs, ms")
     for name, got in rows.items():
@@ -228,6 +238,8 @@ def main() -> None:
     ap.add_argument("--realtime-pairs", type=int, default=0, metavar="N",
                     help="also N interleaved in-process real-time pairs (no recording, --record) of "
                          "--realtime-seconds each: tick lateness p50/p99/max")
+    ap.add_argument("--realtime-configs", default="baseline,record",
+                    help="configurations of the real-time pairs (baseline, record, record-nice10)")
     ap.add_argument("--client", metavar="URL", help=argparse.SUPPRESS)  # the subscribing viewer's process
     args = ap.parse_args()
     if args.client:
@@ -236,7 +248,7 @@ def main() -> None:
     if args.inprocess:
         inprocess(args.duration, args.rounds)
     if args.realtime_pairs:
-        realtime_inprocess(args.realtime_seconds, args.realtime_pairs)
+        realtime_inprocess(args.realtime_seconds, args.realtime_pairs, tuple(args.realtime_configs.split(",")))
     if args.skip_processes:
         return
     import os

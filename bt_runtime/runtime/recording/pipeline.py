@@ -9,7 +9,9 @@ server (its own channels: only topics a client subscribed to, and the high-rate 
 ``live_rate_hz``, a viewing rate); every ``flush_interval_s`` wall seconds it closes the bag's
 segment. It works in slices of at
 most ``slice_s`` (0.5 ms) and then releases the GIL; in real time it also keeps out of the
-millisecond before each tick deadline (``tick_guard``), so the tick finds the GIL free.
+millisecond before each tick deadline (``tick_guard``), so the tick finds the GIL free. It runs
+at the loop's own OS priority (``writer_nice``): a lower one let the OS deschedule it while it
+held the GIL.
 
 On virtual time there is no thread (``start(on_loop=True)``): the recorder's task calls
 ``drain`` every few robot tenths of a second, between ticks. Work on the loop takes no robot
@@ -50,6 +52,12 @@ VIEWING_RATE_KINDS = ("odom", "pose", "imu", "command", "odometry")
 
 
 class RecordPipeline:
+    # the writer thread's OS niceness in real time: 0, the loop's own. At +10 a loaded machine
+    # descheduled the writer in the middle of a segment close, which holds the GIL, and the loop's
+    # thread waited for it (the longest close step 17-98 ms at nice +10, 2.5-5 ms at 0, with two
+    # busy processes beside; bench/recording.py --realtime-configs baseline,record,record-nice10)
+    writer_nice = 0
+
     def __init__(self, *, bag: Rosbag2Bag | None = None, live: FoxgloveLive | None = None,
                  state: ConvertState | None = None, queue_size: int = 20_000, flush_interval_s: float = 5.0,
                  latched_topics: tuple[str, ...] = (), slice_s: float = 0.0005, live_rate_hz: float = 0.0):
@@ -207,8 +215,9 @@ class RecordPipeline:
 
     # -- the writer thread -------------------------------------------------------------------------
     def _run(self) -> None:
-        with contextlib.suppress(AttributeError, OSError):  # lower priority than the loop's thread
-            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 10)
+        if self.writer_nice:
+            with contextlib.suppress(AttributeError, OSError):  # a lower priority than the loop's thread
+                os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), self.writer_nice)
         queue = self.queue
         clock = time.perf_counter
         slice_s = self.slice_s
