@@ -32,7 +32,9 @@ DEFAULT_TREES = ("mixed:100,mixed:1000,mixed:5000,mixed:20000,builtin:1000,built
 WORKER = """
 import gc, json, os, sys, time
 sys.path[:0] = [os.getcwd(), sys.argv[1]]
+import bt_runtime  # this checkout's, before tick.py puts its own repository first on sys.path
 import tick
+assert os.path.dirname(os.path.dirname(bt_runtime.__file__)) == os.getcwd(), bt_runtime.__file__
 from treegen import SHAPES
 gc.enable()
 clock = time.process_time
