@@ -18,7 +18,7 @@ from ..ports import EMPTY
 from ..status import FAILURE, SUCCESS
 from .assign import make_assign, make_bad_assign
 from .errors import CastError, ScriptError, ScriptRuntimeError
-from .node_ticks import condition_node_tick, script_node_tick
+from .node_ticks import condition_node_tick, script_node_tick, shape_condition_tick, shape_node_tick
 from .operators import binary, compare, ieee_div, unary
 from .parser import Assign, Binary, Compare, Literal, Name, Node, ParseError, Ternary, Unary, parse
 from .shortcuts import shortcut_assign
@@ -388,16 +388,42 @@ _IDENTIFIER = re.compile(r"(?<![A-Za-z0-9_@.])([A-Za-z_][A-Za-z0-9_]*)")  # spli
 # text between the names the split finds, so the key is tested (shorter, and no extra pass).
 _DOT_NAME = re.compile(r"\.[A-Za-z_]")
 _MARK = "\x00"  # stands for a variable in a template's key (the text itself never contains it)
-_templates: dict[str, tuple[list[Node], tuple[str, ...]] | None] = {}  # key -> (folded statements, placeholders)
+_templates: dict[str, _Template | None] = {}  # key -> the template, None when the key has none
 _TEMPLATES_KEPT = 4096
 
+# The shapes (shortcuts.py, compiler._compare_one) a one-statement template may have that a
+# Script/ScriptCondition node ticks in one call (node_ticks.py), and where their variable
+# names are in the shape tuple.
+_NAME_FIELDS = {"update": (1,), "arith": (1, 2), "constant": (1,), "copy": (1, 2), "order": (1,)}
 
-def _parse_via_template(text: str) -> tuple[list[Node], dict[str, str]] | None:
-    """The statements of ``text`` from the parse of its template (every variable renamed
-    ``_0``, ``_1``... in order of appearance) and the renaming back; None when the text is
-    not fit for a template or its template does not parse (then the plain parse reports the
-    error with the text's own positions and names). The token kinds of the template are
-    those of the text, so it parses exactly when the text does, into the same tree."""
+
+class _Template:
+    """The folded statements of a template (variables renamed ``_0``, ``_1``... in order of
+    appearance), its placeholders, and for a one-statement template with a one-call node
+    tick its ``form``: the compiled statement's ``shape`` with each variable name replaced by
+    its placeholder's index. With a form, a script of the template needs no closure to be
+    ticked by a node (``Script.action_tick``); its closure is compiled on first need."""
+
+    __slots__ = ("statements", "placeholders", "form")
+
+    def __init__(self, statements: list[Node], placeholders: tuple[str, ...]):
+        self.statements = statements
+        self.placeholders = placeholders
+        self.form = None
+        if len(statements) == 1:
+            shape = getattr(_emit(statements[0], {}), "shape", None)
+            fields = _NAME_FIELDS.get(shape[0]) if shape is not None else None
+            if fields is not None:
+                index = {p: i for i, p in enumerate(placeholders)}
+                self.form = tuple(index[v] if i in fields else v for i, v in enumerate(shape))
+
+
+def _template_of(text: str) -> tuple[_Template, list[str]] | None:
+    """The template of ``text`` and its variable names in order of appearance (what the
+    template's placeholders stand for); None when the text is not fit for a template or its
+    template does not parse (then the plain parse reports the error with the text's own
+    positions and names). The token kinds of the template are those of the text, so it parses
+    exactly when the text does, into the same tree with the names renamed."""
     if _MARK in text:
         return None
     parts = _IDENTIFIER.split(text)  # [text, name, text, name, ..., text]: one pass
@@ -407,22 +433,21 @@ def _parse_via_template(text: str) -> tuple[list[Node], dict[str, str]] | None:
     found = parts[1::2]
     if "true" in found or "false" in found:  # literals, not variables: no template
         return None
-    cached = _templates.get(key, EMPTY)
-    if cached is EMPTY:
+    template = _templates.get(key, EMPTY)
+    if template is EMPTY:
         pieces = key.split(_MARK)
         placeholders = tuple(f"_{i}" for i in range(len(pieces) - 1))
-        template = pieces[0] + "".join(p + piece for p, piece in zip(placeholders, pieces[1:]))
+        text_of_template = pieces[0] + "".join(p + piece for p, piece in zip(placeholders, pieces[1:]))
         try:
-            cached = ([_fold_all(s) for s in parse(template)], placeholders)
+            template = _Template([_fold_all(s) for s in parse(text_of_template)], placeholders)
         except (ParseError, RecursionError):
-            cached = None
+            template = None
         if len(_templates) >= _TEMPLATES_KEPT:
             _templates.clear()
-        _templates[key] = cached
-    if cached is None:
+        _templates[key] = template
+    if template is None:
         return None
-    statements, placeholders = cached
-    return statements, dict(zip(placeholders, found))
+    return template, found
 
 
 # --- public object --------------------------------------------------------------------------
@@ -454,14 +479,84 @@ def _run_condition(fn: Fn, text: str, node: Any) -> Any:
 
 
 class Script:
-    """A compiled script. ``run`` returns the last expression's value (int, float, str, EMPTY)."""
+    """A compiled script. ``run`` returns the last expression's value (int, float, str, EMPTY).
 
-    __slots__ = ("text", "_fn", "_action_tick", "_condition_tick")
+    A script of one statement that a node ticks in one call (``x := x + 1``, ``x > 0``: its
+    template has a ``form``) is made without its closure: a Script or ScriptCondition node
+    holding it ticks through ``node_ticks`` and needs the closure only when that tick hands
+    over (an entry not found, or of another kind), which is rare; the closure is compiled then,
+    or when ``run`` or ``_fn`` is first used. The first tick of a node finds its entries
+    (``_resolve``) and ticks again without the closure."""
+
+    __slots__ = ("text", "_compiled", "_action_tick", "_condition_tick", "_template", "_names")
 
     def __init__(self, text: str, fn: Fn):
         self.text = text
-        self._fn = fn
-        self._action_tick = self._condition_tick = None
+        self._compiled = fn
+        self._action_tick = self._condition_tick = self._template = self._names = None
+
+    @classmethod
+    def _of_template(cls, text: str, template: _Template, names: list[str]) -> Script:
+        """The script ``text`` of ``template`` (which has a form), ``names`` the variables its
+        placeholders stand for; its closure is compiled on first need."""
+        self = _new_object(cls)
+        self.text = text
+        self._compiled = self._action_tick = self._condition_tick = None
+        self._template = template
+        self._names = names
+        return self
+
+    @property
+    def _fn(self) -> Fn:
+        """The script's closure ``f(blackboard, enums) -> value`` (compiled now if not yet)."""
+        return self._compiled or self._compile()
+
+    def _compile(self) -> Fn:
+        template = self._template
+        names = dict(zip(template.placeholders, self._names))
+        fn = self._compiled = _emit(template.statements[0], names)
+        return fn
+
+    def _shape(self) -> tuple:
+        """The compiled statement's ``shape`` (as ``_fn.shape``), made from the template's form."""
+        names = self._names
+        form = self._template.form
+        fields = _NAME_FIELDS[form[0]]
+        return tuple(names[v] if i in fields else v for i, v in enumerate(form))
+
+    def _resolve(self, node: Any) -> bool:
+        """Find the entries the statement's one-call tick reads that the node's blackboard has
+        not remembered yet (``get_entry`` remembers what it finds; finding has no other
+        effect). True when some were missing and all are found now: the tick may try again."""
+        form = self._template.form
+        bb = node.config.blackboard
+        resolved = bb._resolved
+        names = self._names
+        found_new = False
+        for i in _NAME_FIELDS[form[0]]:
+            key = names[form[i]]
+            if key not in resolved:
+                if bb.get_entry(key) is None:
+                    return False
+                found_new = True
+        return found_new
+
+    def _action_slow(self, node: Any) -> Any:
+        """What the one-call tick of a script without its closure hands over to."""
+        fn = self._compiled
+        if fn is None:
+            if self._resolve(node):
+                return self._action_tick(node)
+            fn = self._compile()
+        return _run_action(fn, self.text, node)
+
+    def _condition_slow(self, node: Any) -> Any:
+        fn = self._compiled
+        if fn is None:
+            if self._resolve(node):
+                return self._condition_tick(node)
+            fn = self._compile()
+        return _run_condition(fn, self.text, node)
 
     def action_tick(self) -> Any:
         """``f(node) -> SUCCESS`` that runs the script on the node's blackboard, errors reported
@@ -469,8 +564,14 @@ class Script:
         node with this text; node_ticks.py makes a one-frame one for the commonest statements)."""
         tick = self._action_tick
         if tick is None:
-            general = partial(_run_action, self._fn, self.text)
-            tick = self._action_tick = script_node_tick(self._fn, general, self.text) or general
+            if self._compiled is None:
+                tick = shape_node_tick(self._shape(), self._action_slow, self.text)
+            else:
+                general = partial(_run_action, self._compiled, self.text)
+                tick = script_node_tick(self._compiled, general, self.text)
+            if tick is None:
+                tick = partial(_run_action, self._fn, self.text)
+            self._action_tick = tick
         return tick
 
     def condition_tick(self) -> Any:
@@ -478,13 +579,19 @@ class Script:
         tick of a ScriptCondition node in one call."""
         tick = self._condition_tick
         if tick is None:
-            general = partial(_run_condition, self._fn, self.text)
-            tick = self._condition_tick = condition_node_tick(self._fn, general) or general
+            if self._compiled is None:
+                tick = shape_condition_tick(self._shape(), self._condition_slow)
+            else:
+                general = partial(_run_condition, self._compiled, self.text)
+                tick = condition_node_tick(self._compiled, general)
+            if tick is None:
+                tick = partial(_run_condition, self._fn, self.text)
+            self._condition_tick = tick
         return tick
 
     def run(self, blackboard, enums: dict[str, int] | None = None) -> Any:
         try:
-            return self._fn(blackboard, enums)
+            return (self._compiled or self._compile())(blackboard, enums)
         except CastError:
             raise
         except BTRuntimeError as exc:
@@ -493,7 +600,7 @@ class Script:
     def run_bool(self, blackboard, enums: dict[str, int] | None = None) -> bool:
         """``run`` then the bool conversion of spec 6.5 (pre-conditions, ScriptCondition)."""
         try:
-            value = self._fn(blackboard, enums)
+            value = (self._compiled or self._compile())(blackboard, enums)
         except CastError:
             raise
         except BTRuntimeError as exc:
@@ -506,6 +613,9 @@ class Script:
         return f"Script({self.text!r})"
 
 
+_new_object = object.__new__
+
+
 @lru_cache(maxsize=4096)
 def compile_script(text: str) -> Script:
     """Parse and compile ``text`` once (cached: a Script holds no state, so it can be shared).
@@ -513,10 +623,15 @@ def compile_script(text: str) -> Script:
     Raises ``ScriptError`` ('Error in the script "<text>"\\n<parser message>').
     """
     try:
-        via_template = _parse_via_template(text)
-        if via_template is not None:
-            statements, names = via_template
-            fn = _emit(statements[0], names) if len(statements) == 1 else _sequence([_emit(s, names) for s in statements])
+        hit = _template_of(text)
+        if hit is not None:
+            template, names = hit
+            if template.form is not None:
+                return Script._of_template(text, template, names)
+            statements = template.statements
+            renaming = dict(zip(template.placeholders, names))
+            fn = (_emit(statements[0], renaming) if len(statements) == 1
+                  else _sequence([_emit(s, renaming) for s in statements]))
         else:
             fn = _sequence([compile_node(s) for s in parse(text)])
     except ParseError as exc:

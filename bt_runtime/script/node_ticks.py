@@ -28,8 +28,11 @@ def script_node_tick(fn: Any, slow: NodeTick, text: str = "") -> NodeTick | None
     """A one-call tick for a Script node whose compiled script is ``fn`` (source ``text``), or
     None."""
     shape = getattr(fn, "shape", None)
-    if shape is None:
-        return None
+    return None if shape is None else shape_node_tick(shape, slow, text)
+
+
+def shape_node_tick(shape: tuple, slow: NodeTick, text: str = "") -> NodeTick | None:
+    """``script_node_tick`` for a compiled script of this ``shape``."""
     kind = shape[0]
     if kind == "sequence":
         return _statements(shape[1], text)
@@ -47,7 +50,12 @@ def script_node_tick(fn: Any, slow: NodeTick, text: str = "") -> NodeTick | None
 def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
     """A one-call tick for a ScriptCondition node whose compiled script is ``fn``, or None."""
     shape = getattr(fn, "shape", None)
-    if shape is None or shape[0] != "order":
+    return None if shape is None else shape_condition_tick(shape, slow)
+
+
+def shape_condition_tick(shape: tuple, slow: NodeTick) -> NodeTick | None:
+    """``condition_node_tick`` for a compiled script of this ``shape``."""
+    if shape[0] != "order":
         return None
     _, key, fails, number = shape
 

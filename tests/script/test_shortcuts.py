@@ -195,3 +195,66 @@ def test_one_call_node_ticks_do_what_the_node_tick_does(tag: str, code: str) -> 
             STATES.items(), STATES.items(), ({}, {"y": 9, "Z": 1})):
         expected = outcome(type(node).tick, prep_x, prep_y, enums)
         assert outcome(fast, prep_x, prep_y, enums) == expected, (code, x_name, y_name, enums)
+
+
+@pytest.mark.parametrize(("tag", "code"), NODE_CODES)
+def test_a_fresh_scripts_one_call_tick_does_what_the_node_tick_does(tag: str, code: str) -> None:
+    """The same, each combination on a script compiled anew, so its first tick is the first
+    use of the script: a one-statement script made without its closure (compiler.Script)
+    finds its entries on that tick, or compiles the closure when the one-call tick hands over."""
+    from bt_runtime import BehaviorTreeFactory
+
+    forget_compiled()
+    tree = BehaviorTreeFactory().create_tree_from_text(
+        f'<root BTCPP_format="4"><BehaviorTree ID="Main"><{tag} code="{code.replace(">", "&gt;").replace("<", "&lt;")}"/>'
+        '</BehaviorTree></root>')
+    node = tree.root_node
+    general = type(node).tick
+
+    def outcome(fresh: bool, prep_x, prep_y, enums) -> list:
+        bb = Blackboard()
+        prep_x(bb, "x")
+        prep_y(bb, "y")
+        node.config.blackboard = bb
+        node.config.enums = enums
+        forget_compiled()
+        script = node._script = compiler.compile_script(code)
+        tick = (script.action_tick() if tag == "Script" else script.condition_tick()) if fresh else general
+        seen = []
+        for _ in range(2):
+            try:
+                seen.append(("ok", tick(node)))
+            except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
+                seen.append(("error", type(exc), str(exc)))
+            for key in ("x", "y"):
+                entry = bb.get_entry(key)
+                seen.append(None if entry is None else (key, type(entry.value), repr(entry.value), entry.type.name,
+                                                        entry.sequence_id))
+        return seen
+
+    for (x_name, prep_x), (y_name, prep_y), enums in itertools.product(
+            STATES.items(), STATES.items(), ({}, {"y": 9, "Z": 1})):
+        expected = outcome(False, prep_x, prep_y, enums)
+        assert outcome(True, prep_x, prep_y, enums) == expected, (code, x_name, y_name, enums)
+
+
+def test_a_one_statement_script_node_ticks_without_compiling_its_closure() -> None:
+    """Loading makes no closure for 'x := x + 1' or 'x > 0' on a Script/ScriptCondition node
+    (the node's one-call tick is the statement), and ticking on entries of the usual kind
+    never needs one; a statement that meets another kind compiles it then."""
+    from bt_runtime import BehaviorTreeFactory
+
+    forget_compiled()
+    bb = Blackboard.create()
+    bb.set("n", 0.0)
+    bb.set("k", 1)
+    tree = BehaviorTreeFactory().create_tree_from_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
+        '<Script code="n := n + 1"/><ScriptCondition code="n &gt; 1"/><Script code="k += 1"/>'
+        '</Sequence></BehaviorTree></root>', bb)
+    plus, above, int_counter = (node._script for node in tree.root_node.children)
+    assert tree.tick_exactly_once() is NodeStatus.FAILURE
+    assert tree.tick_exactly_once() is NodeStatus.SUCCESS
+    assert bb.get("n") == 2.0 and bb.get("k") == 2
+    assert plus._compiled is None and above._compiled is None  # never needed
+    assert int_counter._compiled is not None  # an int entry: the general rules ran
