@@ -9,7 +9,8 @@ loading code from bench/tick.py (``ours_tree``, ``btcpp_tree``), run against eac
 bt_runtime. Printed per tree: us per node (median over rounds of each round's median), the
 ratio new/old, BT.CPP-py's us per node, each checkout's ratio to BT.CPP-py (median and range
 over rounds), and 2nd/1st (later loads over the first load of a subprocess: about 1 when a
-dropped tree is freed at once).
+dropped tree is freed at once), and the first tick of a loaded tree (us per node: work a load
+leaves to the first tick shows there).
 
 Run: python bench/load_compare.py --other /path/to/old/checkout [--trees mixed:1000,...]
 """
@@ -45,17 +46,20 @@ out = {}
 for spec in sys.argv[2].split(","):
     shape, size = spec.split(":")
     g = SHAPES[shape](int(size))
-    ours, peer, first = [], [], None
+    ours, peer, first, ours_tick, peer_tick = [], [], None, [], []
     for i in range(int(sys.argv[3]) + 1):
         tick._clear_script_cache()
-        t0 = clock(); tick.ours_tree(g.xml, g.preset); elapsed = clock() - t0
+        t0 = clock(); run = tick.ours_tree(g.xml, g.preset); elapsed = clock() - t0
+        t0 = clock(); run(); ours_tick.append(clock() - t0)
         if i == 0:
             first = elapsed
         else:
             ours.append(elapsed)
-        t0 = clock(); tick.btcpp_tree(g.xml, g.preset); peer.append(clock() - t0)
+        t0 = clock(); run = tick.btcpp_tree(g.xml, g.preset); peer.append(clock() - t0)
+        t0 = clock(); run(); peer_tick.append(clock() - t0)
     tick.ours_tree.keep = None
-    out[spec] = {"nodes": g.nodes, "ours": ours, "peer": peer[1:], "first": first}
+    out[spec] = {"nodes": g.nodes, "ours": ours, "peer": peer[1:], "first": first,
+                 "ours_tick": ours_tick[1:], "peer_tick": peer_tick[1:]}
 print(json.dumps(out))
 """
 
@@ -81,23 +85,28 @@ def main() -> None:
         for name in (("old", "new") if r % 2 == 0 else ("new", "old")):
             for spec, d in _run(checkouts[name], args.trees, args.loads).items():
                 nodes[spec] = d["nodes"]
-                row = rows[name].setdefault(spec, {"ours": [], "peer": [], "ratio": [], "second": []})
+                row = rows[name].setdefault(spec, {"ours": [], "peer": [], "ratio": [], "second": [], "tick": [],
+                                                   "peer_tick": []})
                 ours, peer = statistics.median(d["ours"]), statistics.median(d["peer"])
                 row["ours"].append(ours)
                 row["peer"].append(peer)
                 row["ratio"].append(ours / peer)
                 row["second"].append(ours / d["first"])
+                row["tick"].append(statistics.median(d["ours_tick"]))
+                row["peer_tick"].append(statistics.median(d["peer_tick"]))
     print(f"load average at end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     med = statistics.median
     print(f"{'tree':<16}{'nodes':>7} | {'old us/n':>9}{'new us/n':>9}{'new/old':>8} | {'BT us/n':>8} | "
-          f"{'old/BT.CPP':>16}{'new/BT.CPP':>16} | {'2nd/1st old, new':>16}")
+          f"{'old/BT.CPP':>16}{'new/BT.CPP':>16} | {'2nd/1st old, new':>16} | 1st tick us/n old, new, BT")
     for spec, n in nodes.items():
         old, new = rows["old"][spec], rows["new"][spec]
         span = lambda v: f"{med(v):.2f} ({min(v):.1f}-{max(v):.1f})"  # noqa: E731
         print(f"{spec:<16}{n:>7} | {med(old['ours']) * 1e6 / n:>9.2f}{med(new['ours']) * 1e6 / n:>9.2f}"
               f"{med(new['ours']) / med(old['ours']):>8.2f} | {med(old['peer'] + new['peer']) * 1e6 / n:>8.2f} | "
               f"{span(old['ratio']):>16}{span(new['ratio']):>16} | "
-              f"{med(old['second']):>7.2f}, {med(new['second']):.2f}")
+              f"{med(old['second']):>7.2f}, {med(new['second']):.2f} | "
+              f"{med(old['tick']) * 1e6 / n:.2f}, {med(new['tick']) * 1e6 / n:.2f}, "
+              f"{med(old['peer_tick'] + new['peer_tick']) * 1e6 / n:.2f}")
 
 
 if __name__ == "__main__":
