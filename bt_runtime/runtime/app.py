@@ -160,6 +160,9 @@ class AutonomyRuntime:
         self.tick_loop = TickLoop(tree, self.config.tick, gate=self.gate, supervisor=self.supervisor,
                                   realtime=self.realtime)
         self.tick_loop.on_tick.append(self._on_tick)
+        deliver_held = getattr(self.driver, "deliver_held", None)
+        if deliver_held is not None:  # (the ROS 2 driver: streams delivered at the tick)
+            self.tick_loop.before_tick.append(deliver_held)
 
     def _on_tick(self, status: NodeStatus) -> None:
         self.goals.on_tick(status)
@@ -222,7 +225,11 @@ class AutonomyRuntime:
 
     def _start_tick_task(self) -> None:
         assert self.tick_loop is not None
-        self._tick_task = self.loop.create_task(self.tick_loop.run(self._tick_origin), name="tick")
+        self._tick_task = task = self.loop.create_task(self.tick_loop.run(self._tick_origin), name="tick")
+        hold = getattr(self.driver, "hold_until_tick", None)
+        if hold is not None and self.realtime:  # held streams wait for the tick while it runs
+            hold(True)
+            task.add_done_callback(lambda t: hold(False) if self._tick_task is t else None)
 
     @property
     def tick_task(self) -> asyncio.Task | None:

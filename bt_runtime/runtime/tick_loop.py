@@ -114,6 +114,9 @@ class TickLoop:
         self.done: asyncio.Future | None = None
         self.last_error: BaseException | None = None
         self.on_tick: list[Callable[[NodeStatus], Any]] = []
+        # called first in every tick: the driver delivers the messages held for the tick
+        # (Ros2Driver.deliver_held), so the tree and the gate see them in this tick
+        self.before_tick: list[Callable[[], Any]] = []
         self._error_latched = False
         self._last_error_key: tuple | None = None
         self.pacer: TimerPacer | None = None  # the real-time pacing of the current run
@@ -172,6 +175,11 @@ class TickLoop:
                 k += missed
 
     def _tick_once(self, lateness: float) -> NodeStatus:
+        for callback in self.before_tick:
+            try:
+                callback()
+            except Exception as exc:  # a delivery hook must not stop the ticks
+                log.error("before_tick_failed", error=repr(exc))
         gate = self.gate
         if gate is not None:
             gate.heartbeat()

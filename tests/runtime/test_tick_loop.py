@@ -159,3 +159,22 @@ async def test_tick_cost_is_the_threads_cpu_and_the_wall_time_is_kept_apart(make
     assert stats.count >= 20
     assert stats.wall_mean >= 0.003
     assert stats.cost_mean < 0.001
+
+
+async def test_before_tick_hooks_run_first_in_every_tick_and_a_failing_one_does_not_stop_it(make_runtime):
+    """The ROS 2 driver delivers the streams held for the tick (deliver_at_tick) in this hook:
+    the tree must see them in the same tick, and a failing hook must not stop the ticks."""
+    order = []
+
+    def register(factory):
+        factory.register_simple_condition("Mark", lambda n: (order.append("tree"), NodeStatus.SUCCESS)[1])
+
+    rt = make_runtime(tree_xml('<KeepRunningUntilFailure><Mark/></KeepRunningUntilFailure>'), register=[register])
+    rt.tick_loop.before_tick.append(lambda: order.append("hook"))
+    rt.tick_loop.before_tick.append(lambda: 1 / 0)
+    await rt.start()
+    await asyncio.sleep(0.1)
+    await rt.stop()
+    assert len(order) >= 18 and order[:4] == ["hook", "tree", "hook", "tree"]
+    assert order[::2] == ["hook"] * len(order[::2]) and order[1::2] == ["tree"] * len(order[1::2])
+    assert rt.tick_loop.stats.errors == 0

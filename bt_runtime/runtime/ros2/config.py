@@ -12,6 +12,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+SAFETY_STREAMS = ("scan", "bumper", "nav_cmd_vel")  # the gate reads them: never deliver_at_tick
+
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
@@ -207,6 +209,12 @@ class Ros2Config(_Model):
     components: dict[str, Component] = Field(default_factory=_default_components)
     validation: Validation = Field(default_factory=Validation)
     lifecycle: LifecycleConfig = Field(default_factory=LifecycleConfig)
+    deliver_at_tick: list[str] = Field(
+        default_factory=lambda: ["imu", "odom"],
+        description="streams delivered in one batch just before each tick instead of waking the event loop "
+        "for every message (a sample waits < 1 tick period; saves a loop pass per message while the "
+        "tree ticks). Only streams nothing on the safety path reads: scan, bumper, nav_cmd_vel and "
+        "the gate's inputs and locks always wake the loop at once")
     robot: RobotConfig | None = Field(default_factory=RobotConfig)
 
     @field_validator("cyclonedds_uri")
@@ -230,6 +238,15 @@ class Ros2Config(_Model):
                 raise ValueError(f"expected inline XML (<CycloneDDS>...) or file://PATH, got {item[:80]!r}")
             if not os.path.isfile(item[len("file://"):]):
                 raise ValueError(f"{item}: no such file")
+        return value
+
+    @field_validator("deliver_at_tick")
+    @classmethod
+    def _deliver_at_tick(cls, value: list[str]) -> list[str]:
+        for stream in value:
+            if stream in SAFETY_STREAMS or stream.startswith(("cmd_vel_input/", "lock/")):
+                raise ValueError(f"{stream!r} feeds the decision gate (safety zones, commands, locks): "
+                                 "it must wake the loop at once, not wait for the tick")
         return value
 
     @model_validator(mode="after")

@@ -14,7 +14,11 @@ Threading: Cyclone calls the listeners on its own receive threads. A listener on
 samples (deserialising them with ``cdr.py``'s compiled decoders, several times faster than
 Cyclone's own), stamps them with the loop clock and puts them in the node's inbox; the first
 sample into an empty inbox wakes the loop (``loop.call_soon_threadsafe``), which delivers
-everything that arrived meanwhile in one pass, in arrival order. Everything else (user
+everything that arrived meanwhile in one pass, in arrival order. A reader marked ``held``
+(high-rate streams nothing on the safety path reads: imu, odom) does not wake the loop while
+the node's ``hold`` is set (the runtime sets it while its tick loop runs): its samples wait in
+the inbox for the next wake-up or for ``deliver_held()``, which the tick calls first thing,
+and wake the loop themselves once the oldest has waited ``HOLD_MAX``. Everything else (user
 callbacks, futures) runs on the loop.
 The loop never blocks on DDS: writes are non-blocking for best-effort topics and bounded by
 ``max_blocking_time`` for reliable ones (which only blocks when a reader's history is full).
@@ -111,6 +115,9 @@ def loopback_config(domain_id: int | None = None, lease_duration: float = 2.0) -
 # the node: one participant, readers and writers
 # ---------------------------------------------------------------------------------------------
 
+HOLD_MAX = 0.05  # s: a held sample waits no longer than this for a tick (the tick loop stalled or stopped)
+
+
 class DdsNode:
     """One DDS participant on one domain, delivering samples on one asyncio loop."""
 
@@ -135,23 +142,51 @@ class DdsNode:
         self._inbox: deque[tuple[Reader, list, float]] = deque()  # filled by receive threads
         self._wake_pending = False
         self.wakeups = 0  # passes of the loop that delivered the inbox
+        self.hold = False  # held readers' samples wait for deliver_held() (see the module docstring)
+        self._held_since: float | None = None  # receive time of the oldest held sample waiting
 
     def post(self, reader: Reader, samples: list, now: float) -> None:
         """From a receive thread: queue ``samples`` for the loop; wake it unless a wake-up is
-        pending already (that one delivers these too). Raises RuntimeError if the loop is closed."""
+        pending already (that one delivers these too) or the reader is held and the oldest held
+        sample is younger than ``HOLD_MAX``. Raises RuntimeError if the loop is closed."""
         self._inbox.append((reader, samples, now))
-        if not self._wake_pending:
-            self._wake_pending = True
-            try:
-                self.loop.call_soon_threadsafe(self._deliver_inbox)
-            except RuntimeError:
-                self._wake_pending = False
-                raise
+        if self._wake_pending:
+            return
+        if self.hold and reader.held:
+            since = self._held_since
+            if since is None:
+                self._held_since = now
+                return
+            if now - since < HOLD_MAX:
+                return
+        self._wake_pending = True
+        try:
+            self.loop.call_soon_threadsafe(self._deliver_inbox)
+        except RuntimeError:
+            self._wake_pending = False
+            raise
 
     def _deliver_inbox(self) -> None:  # on the loop
         # clear the flag first: a sample posted from now on either is delivered below or wakes us again
         self._wake_pending = False
         self.wakeups += 1
+        self._drain()
+
+    def deliver_held(self) -> None:
+        """On the loop: deliver what waits in the inbox now (held samples and any whose wake-up
+        is still pending; that wake-up then finds the rest or nothing)."""
+        if self._inbox:
+            self._drain()
+
+    def set_hold(self, hold: bool) -> None:
+        """On the loop: hold the held readers' samples for ``deliver_held()``, or stop holding
+        (what waits is delivered in the next pass of the loop)."""
+        self.hold = hold
+        if not hold and not self.closed:
+            self.loop.call_soon(self.deliver_held)
+
+    def _drain(self) -> None:
+        self._held_since = None
         inbox = self._inbox
         for _ in range(len(inbox)):  # what is there now; later arrivals have their own wake-up
             reader, samples, now = inbox.popleft()
@@ -226,6 +261,7 @@ class Reader:
         self.received = 0
         self.malformed = 0
         self.closed = False
+        self.held = False  # samples wait for the tick while the node holds (DdsNode.post)
         loop = node.loop
         self._loop = loop
         self._decode = cdr.decoder(data_type)

@@ -90,6 +90,7 @@ class Ros2Driver:
         self.send_errors = 0
         self.goal_server: Any = None  # action_server.GoalActionServer once serve_goals() ran
         self._mux_topics: tuple[list, list] = ([], [])  # the gate's extra inputs and locks
+        self._hold = False  # hold_until_tick
 
     # -- lifecycle -------------------------------------------------------------------------------
     async def start(self) -> None:
@@ -119,6 +120,10 @@ class Ros2Driver:
                 continue
             self._readers[stream] = node.subscription(topic.name, msg_type, _qos(topic.qos),
                                                       self._stream_handler(stream, convert))
+        for stream in cfg.deliver_at_tick:
+            if stream in self._readers:
+                self._readers[stream].held = True
+        node.hold = self._hold
         self._open_mux_topics()
         cmd = t.cmd_vel
         self._cmd_type = idl.TwistStamped if cmd.stamped else idl.Twist
@@ -164,6 +169,21 @@ class Ros2Driver:
         intake.feedback_period = 1.0 / cfg.feedback_hz
         self.goal_server = GoalActionServer(self.node, intake, action=cfg.action, topic=cfg.topic,
                                             map_frame=self.config.navigation.map_frame)
+
+    # -- delivery at the tick (config.deliver_at_tick) --------------------------------------------
+    def hold_until_tick(self, hold: bool) -> None:
+        """While ``hold``: the ``deliver_at_tick`` streams wait for ``deliver_held()`` (the tick
+        loop calls it before each tick) instead of waking the loop per message. The runtime
+        holds while its real-time tick task runs."""
+        self._hold = hold
+        if self.node is not None:
+            self.node.set_hold(hold)
+
+    def deliver_held(self) -> None:
+        """Deliver the messages waiting for the tick (on the loop, before the tree ticks)."""
+        node = self.node
+        if node is not None:
+            node.deliver_held()
 
     # -- the gate's extra inputs and locks (twist_mux) --------------------------------------------
     def open_command_inputs(self, inputs: list, locks: list) -> None:
