@@ -50,6 +50,20 @@ class _ScriptHolder:
     __slots__ = ()  # the nodes hold _code_text, _script, _code_from_blackboard in slots
     _kind = "Script"
 
+    def _literal_script(self, config: NodeConfig | None) -> bool:
+        """Compile a literal ``code`` before the node is initialised (True), so that
+        ``TreeNode.__init__`` picks the script's own tick at once; otherwise (no config, no
+        ``code``, code from the blackboard: False) ``_init_script`` does it after."""
+        raw = config.input_ports.get("code") if config is not None else None
+        # (a pointer is '{key}' or '='; '{' not in the text settles most without the call)
+        if type(raw) is str and (("{" not in raw and raw != "=") or blackboard_key(raw, "code") is None):
+            self._code_from_blackboard = False
+            self._script = compile_node_script(raw)
+            self._code_text = raw
+            return True
+        self._script = None  # see _bare_tick
+        return False
+
     def _init_script(self) -> None:
         raw = self.config.input_ports.get("code")
         if raw is None:
@@ -108,10 +122,13 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
         return [input_port("code", str, description="Piece of code that can be parsed")]
 
     def __init__(self, name: str, config: NodeConfig):
-        self._script = None  # see _bare_tick
         if type(self) in _PLAIN_INIT:  # super().__init__ is TreeNode's: called without super()'s cost
+            if self._literal_script(config):  # (then TreeNode.__init__ picks the script's tick)
+                TreeNode.__init__(self, name, config)
+                return
             TreeNode.__init__(self, name, config)
         else:
+            self._script = None  # see _bare_tick
             super().__init__(name, config)
         self._init_script()
         self._use_script_tick()
@@ -138,10 +155,13 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
                            description="Piece of code that can be parsed. Must return false or true")]
 
     def __init__(self, name: str, config: NodeConfig):
-        self._script = None  # see _bare_tick
         if type(self) in _PLAIN_INIT:  # (as ScriptNode)
+            if self._literal_script(config):
+                TreeNode.__init__(self, name, config)
+                return
             TreeNode.__init__(self, name, config)
         else:
+            self._script = None  # see _bare_tick
             super().__init__(name, config)
         self._init_script()
         self._use_script_tick()

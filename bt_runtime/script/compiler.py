@@ -392,9 +392,9 @@ _templates: dict[str, _Template | None] = {}  # key -> the template, None when t
 _TEMPLATES_KEPT = 4096
 
 # The shapes (shortcuts.py, compiler._compare_one) a one-statement template may have that a
-# Script/ScriptCondition node ticks in one call (node_ticks.py), and where their variable
-# names are in the shape tuple.
-_NAME_FIELDS = {"update": (1,), "arith": (1, 2), "constant": (1,), "copy": (1, 2), "order": (1,)}
+# Script/ScriptCondition node ticks in one call (node_ticks.py), and how many variable names
+# follow the kind in the shape tuple.
+_NAMES_IN_SHAPE = {"update": 1, "arith": 2, "constant": 1, "copy": 2, "order": 1}
 
 
 class _Template:
@@ -402,7 +402,8 @@ class _Template:
     appearance), its placeholders, and for a one-statement template with a one-call node
     tick its ``form``: the compiled statement's ``shape`` with each variable name replaced by
     its placeholder's index. With a form, a script of the template needs no closure to be
-    ticked by a node (``Script.action_tick``); its closure is compiled on first need."""
+    ticked by a node (``Script.action_tick``); its closure is compiled on first need.
+    ``form`` is (kind, index of the first name, index of the second or None, the rest)."""
 
     __slots__ = ("statements", "placeholders", "form")
 
@@ -412,10 +413,11 @@ class _Template:
         self.form = None
         if len(statements) == 1:
             shape = getattr(_emit(statements[0], {}), "shape", None)
-            fields = _NAME_FIELDS.get(shape[0]) if shape is not None else None
-            if fields is not None:
+            count = _NAMES_IN_SHAPE.get(shape[0]) if shape is not None else None
+            if count is not None:
                 index = {p: i for i, p in enumerate(placeholders)}
-                self.form = tuple(index[v] if i in fields else v for i, v in enumerate(shape))
+                self.form = ((shape[0], index[shape[1]], None, shape[2:]) if count == 1 else
+                             (shape[0], index[shape[1]], index[shape[2]], shape[3:]))
 
 
 def _template_of(text: str) -> tuple[_Template, list[str]] | None:
@@ -519,22 +521,21 @@ class Script:
 
     def _shape(self) -> tuple:
         """The compiled statement's ``shape`` (as ``_fn.shape``), made from the template's form."""
+        kind, first, second, rest = self._template.form
         names = self._names
-        form = self._template.form
-        fields = _NAME_FIELDS[form[0]]
-        return tuple(names[v] if i in fields else v for i, v in enumerate(form))
+        return (kind, names[first], *rest) if second is None else (kind, names[first], names[second], *rest)
 
     def _resolve(self, node: Any) -> bool:
         """Find the entries the statement's one-call tick reads that the node's blackboard has
         not remembered yet (``get_entry`` remembers what it finds; finding has no other
         effect). True when some were missing and all are found now: the tick may try again."""
-        form = self._template.form
+        _, first, second, _ = self._template.form
         bb = node.config.blackboard
         resolved = bb._resolved
         names = self._names
         found_new = False
-        for i in _NAME_FIELDS[form[0]]:
-            key = names[form[i]]
+        for i in (first,) if second is None else (first, second):
+            key = names[i]
             if key not in resolved:
                 if bb.get_entry(key) is None:
                     return False

@@ -221,8 +221,9 @@ class TreeBuilder:
         """The port pass of one node: its port attributes into the config (an unknown port is
         an error), defaults for the others, then blackboard entries for the remapped ports and
         the conversion check of literal ones (after every attribute was accepted, as before)."""
-        entries, defaults = self._port_table(manifest)
-        given: list[tuple[str, str, tuple]] = []
+        table = self._port_tables.get(manifest)
+        entries, defaults = table if table is not None else self._port_table(manifest)
+        pending = None  # the given ports that may need a blackboard entry or a literal check
         inputs = cfg.input_ports
         outputs = cfg.output_ports
         for attr, value in attrs.items():
@@ -242,10 +243,15 @@ class TreeBuilder:
                 inputs[attr] = value
             if entry[1]:
                 outputs[attr] = value
-            given.append((attr, value, entry))
+            if entry[3] or value[:1] == "{" or value == "=":
+                if pending is None:
+                    pending = []
+                pending.append((attr, value, entry))
         if defaults:
-            self._fill_defaults(cfg, defaults, [attr for attr, _, _ in given] if given else ())
-        for name, raw, (_, _, port, check) in given:
+            self._fill_defaults(cfg, defaults, [attr for attr in attrs if attr in entries])
+        if pending is None:
+            return
+        for name, raw, (_, _, port, check) in pending:
             if (len(raw) >= 3 and raw[0] == "{" and raw[-1] == "}") or raw == "=" or raw == "{=}":
                 self._port_entry(name, raw, port, bb, doc, elem)  # (a strict blackboard pointer)
             elif check:
