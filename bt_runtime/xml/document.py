@@ -48,6 +48,11 @@ PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")  # in BT.CPP'
 POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
 CONDITION_ATTRIBUTES = PRE_CONDITIONS + POST_CONDITIONS
 _CONDITION_ATTRIBUTE_SET = frozenset(CONDITION_ATTRIBUTES)
+_CONDITION_RANK = {name: i for i, name in enumerate(CONDITION_ATTRIBUTES)}
+
+
+def _condition_rank(item: tuple[str, str]) -> int:
+    return _CONDITION_RANK[item[0]]
 
 
 @dataclass
@@ -295,11 +300,13 @@ class TreeRegistry:
             name = get("name")
             if _CONDITION_ATTRIBUTE_SET.isdisjoint(attrs):
                 conditions = ()
-            else:  # (a loop, not a generator: one frame fewer per element)
+            else:  # (the element's few attributes, not the eight names: a loop, not a generator)
                 conditions = []
-                for a in CONDITION_ATTRIBUTES:
-                    if a in attrs:
-                        conditions.append((a, attrs[a]))
+                for item in items:
+                    if item[0] in _CONDITION_ATTRIBUTE_SET:
+                        conditions.append(item)
+                if len(conditions) > 1:
+                    conditions.sort(key=_condition_rank)  # BT.CPP's order
                 conditions = tuple(conditions)
         else:
             items = conditions = ()
