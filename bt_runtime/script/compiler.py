@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import operator
 import re
+import weakref
 from functools import lru_cache, partial
 from typing import Any
 
@@ -488,7 +489,9 @@ class Script:
     holding it ticks through ``node_ticks`` and needs the closure only when that tick hands
     over (an entry not found, or of another kind), which is rare; the closure is compiled then,
     or when ``run`` or ``_fn`` is first used. The first tick of a node finds its entries
-    (``_resolve``) and ticks again without the closure."""
+    (``_resolve``) and ticks again without the closure. Such a tick calls back into the script,
+    so the script holds it weakly (the nodes hold it): no reference cycle, a dropped tree's
+    scripts are freed by reference counting."""
 
     __slots__ = ("text", "_compiled", "_action_tick", "_condition_tick", "_template", "_names")
 
@@ -547,7 +550,7 @@ class Script:
         fn = self._compiled
         if fn is None:
             if self._resolve(node):
-                return self._action_tick(node)
+                return _held(self._action_tick)(node)
             fn = self._compile()
         return _run_action(fn, self.text, node)
 
@@ -555,7 +558,7 @@ class Script:
         fn = self._compiled
         if fn is None:
             if self._resolve(node):
-                return self._condition_tick(node)
+                return _held(self._condition_tick)(node)
             fn = self._compile()
         return _run_condition(fn, self.text, node)
 
@@ -563,10 +566,13 @@ class Script:
         """``f(node) -> SUCCESS`` that runs the script on the node's blackboard, errors reported
         as ``run`` reports them: the whole tick of a Script node in one call (shared by every
         node with this text; node_ticks.py makes a one-frame one for the commonest statements)."""
-        tick = self._action_tick
+        tick = _held(self._action_tick)
         if tick is None:
             if self._compiled is None:
                 tick = shape_node_tick(self._shape(), self._action_slow, self.text)
+                if tick is not None:
+                    self._action_tick = _WeakRef(tick)  # (it calls back: see the class)
+                    return tick
             else:
                 general = partial(_run_action, self._compiled, self.text)
                 tick = script_node_tick(self._compiled, general, self.text)
@@ -578,10 +584,13 @@ class Script:
     def condition_tick(self) -> Any:
         """``f(node) -> SUCCESS | FAILURE``: ``run_bool`` on the node's blackboard, the whole
         tick of a ScriptCondition node in one call."""
-        tick = self._condition_tick
+        tick = _held(self._condition_tick)
         if tick is None:
             if self._compiled is None:
                 tick = shape_condition_tick(self._shape(), self._condition_slow)
+                if tick is not None:
+                    self._condition_tick = _WeakRef(tick)
+                    return tick
             else:
                 general = partial(_run_condition, self._compiled, self.text)
                 tick = condition_node_tick(self._compiled, general)
@@ -615,6 +624,12 @@ class Script:
 
 
 _new_object = object.__new__
+_WeakRef = weakref.ref
+
+
+def _held(tick: Any) -> Any:
+    """A tick kept by a Script (itself, or through a weak reference), or None."""
+    return tick() if type(tick) is _WeakRef else tick
 
 
 @lru_cache(maxsize=4096)

@@ -93,3 +93,39 @@ def test_a_dropped_factory_and_its_tree_leave_no_cycles_behind() -> None:
     finally:
         if was:
             gc.enable()
+
+
+def test_a_dropped_tree_and_its_forgotten_scripts_leave_no_cycles_behind() -> None:
+    """The compiled scripts a dropped tree alone used (a fresh process's cold load: the cache
+    of compiled scripts emptied) are freed by reference counting too, ticked or not."""
+    from bt_runtime import Blackboard
+    from bt_runtime.script.compiler import forget_compiled
+
+    def blackboard() -> Blackboard:
+        bb = Blackboard.create()
+        for i in range(5):
+            bb.set(f"x{i}", 0.0)
+        bb.set("y", 0.0)
+        return bb
+
+    xml = ('<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>'
+           + "".join(f'<Script code="x{i} := x{i} + 1"/><ScriptCondition code="x{i} &gt; 0"/>'
+                     f'<Script code="y := x{i} * 2"/><Script code="x{i} := 1; y := x{i}"/>' for i in range(5))
+           + '</Sequence></BehaviorTree></root>')
+    factory = BehaviorTreeFactory()
+    factory.create_tree_from_text(xml, blackboard()).tick_exactly_once()  # warm the factory's lazy caches
+    gc.collect()
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        for ticked in (False, True):
+            forget_compiled()
+            tree = factory.create_tree_from_text(xml, blackboard())
+            if ticked:
+                assert tree.tick_exactly_once() is NodeStatus.SUCCESS
+            del tree
+            forget_compiled()
+            assert gc.collect() == 0, ticked
+    finally:
+        if was:
+            gc.enable()
