@@ -44,6 +44,7 @@ keeping lateness p99 <= 1 ms on an idle machine; the last lines say whether this
 Run: python bench/loop.py --quick            (all shapes, idle and driving, < 2 min)
      python bench/loop.py [--seconds 10] [--shapes bare,ros2,sim] [--pacings ...] [--histogram]
      python bench/loop.py --shapes ros2 --idle-only --breakdown   (event-loop CPU by callback)
+     python bench/loop.py --shapes ros2 --deliver-at-tick ''     (imu/odom wake the loop per message)
 """
 
 from __future__ import annotations
@@ -125,13 +126,17 @@ class RobotProcess:
                 self.proc.kill()
 
 
+DELIVER_AT_TICK: list[str] | None = None  # --deliver-at-tick (None: the driver's default)
+
+
 def make_driver(shape: str, robot: RobotProcess | None):
     if shape == "ros2":
         from bt_runtime.runtime.ros2 import Ros2Config, Ros2Driver
 
         # no lifecycle bring-up: sim-robot's servers start active (--nav-autostart), and the
         # bring-up's polling of their services would fall into the measured window
-        return Ros2Driver(Ros2Config(domain_id=robot.domain, lifecycle={"bringup": {"enabled": False}}))
+        extra = {} if DELIVER_AT_TICK is None else {"deliver_at_tick": DELIVER_AT_TICK}
+        return Ros2Driver(Ros2Config(domain_id=robot.domain, lifecycle={"bringup": {"enabled": False}}, **extra))
     from sim.driver import SimDriver
 
     return SimDriver("apartment", "burger", seed=1)
@@ -284,11 +289,17 @@ def main() -> None:
     parser.add_argument("--histogram", action="store_true")
     parser.add_argument("--breakdown", action="store_true",
                         help="event-loop CPU by callback (asyncio loops only; adds its own overhead)")
+    parser.add_argument("--deliver-at-tick", default=None, metavar="STREAMS",
+                        help="ros2: comma-separated streams delivered at the tick (default imu,odom; '' none: "
+                             "every message wakes the loop, as before issue #14's loop2 work)")
     parser.add_argument("--domain", type=int, default=None, help="DDS domain of the ros2 shape (230-232)")
     args = parser.parse_args()
     seconds = args.seconds if args.seconds is not None else (3.0 if args.quick else 10.0)
     warmup = args.warmup if args.warmup is not None else (1.2 if args.quick else 2.0)
     quiet_logging("error")
+    global DELIVER_AT_TICK
+    if args.deliver_at_tick is not None:
+        DELIVER_AT_TICK = [x for x in args.deliver_at_tick.split(",") if x]
     pacings = args.pacings.split(",")
     if "uvloop" in pacings:
         try:

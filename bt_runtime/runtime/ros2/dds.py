@@ -14,11 +14,14 @@ Threading: Cyclone calls the listeners on its own receive threads. A listener on
 samples (deserialising them with ``cdr.py``'s compiled decoders, several times faster than
 Cyclone's own), stamps them with the loop clock and puts them in the node's inbox; the first
 sample into an empty inbox wakes the loop (``loop.call_soon_threadsafe``), which delivers
-everything that arrived meanwhile in one pass, in arrival order. A reader marked ``held``
-(high-rate streams nothing on the safety path reads: imu, odom) does not wake the loop while
-the node's ``hold`` is set (the runtime sets it while its tick loop runs): its samples wait in
-the inbox for the next wake-up or for ``deliver_held()``, which the tick calls first thing,
-and wake the loop themselves once the oldest has waited ``HOLD_MAX``. Everything else (user
+everything that arrived meanwhile in one pass, in arrival order. A reader opened ``at_tick``
+(high-rate streams nothing on the safety path reads: imu, odom) has no listener: it is read on
+the loop by ``deliver_held()``, which the tick calls first thing while the node's ``hold`` is
+set (the runtime sets it while its tick loop runs), and by a ``POLL_PERIOD`` timer otherwise;
+a sample's receive time is then estimated from its source timestamp, clamped between the
+previous read and this one. (With a Cyclone binding without ``ddspy_take`` such a reader keeps
+its listener; its samples then wait in the inbox for the next wake-up or ``deliver_held()``,
+and wake the loop themselves once the oldest has waited ``HOLD_MAX``.) Everything else (user
 callbacks, futures) runs on the loop.
 The loop never blocks on DDS: writes are non-blocking for best-effort topics and bounded by
 ``max_blocking_time`` for reliable ones (which only blocks when a reader's history is full).
@@ -30,6 +33,7 @@ import asyncio
 import contextlib
 import itertools
 import os
+import time
 import uuid as uuidlib
 from collections import deque
 from collections.abc import Awaitable, Callable
@@ -115,6 +119,7 @@ def loopback_config(domain_id: int | None = None, lease_duration: float = 2.0) -
 # the node: one participant, readers and writers
 # ---------------------------------------------------------------------------------------------
 
+POLL_PERIOD = 0.01  # s: at_tick readers are read this often while the node does not hold
 HOLD_MAX = 0.05  # s: a held sample waits no longer than this for a tick (the tick loop stalled or stopped)
 
 
@@ -144,6 +149,9 @@ class DdsNode:
         self.wakeups = 0  # passes of the loop that delivered the inbox
         self.hold = False  # held readers' samples wait for deliver_held() (see the module docstring)
         self._held_since: float | None = None  # receive time of the oldest held sample waiting
+        self._polled: list[Reader] = []  # at_tick readers without listener (read by deliver_held)
+        self._poll_handle: asyncio.TimerHandle | None = None
+        self._last_poll = self.loop.time()
 
     def post(self, reader: Reader, samples: list, now: float) -> None:
         """From a receive thread: queue ``samples`` for the loop; wake it unless a wake-up is
@@ -174,16 +182,40 @@ class DdsNode:
 
     def deliver_held(self) -> None:
         """On the loop: deliver what waits in the inbox now (held samples and any whose wake-up
-        is still pending; that wake-up then finds the rest or nothing)."""
+        is still pending; that wake-up then finds the rest or nothing), then read the at_tick
+        readers."""
         if self._inbox:
             self._drain()
+        if self._polled:
+            now = self.loop.time()
+            since, self._last_poll = self._last_poll, now
+            wall = time.time()
+            for reader in self._polled:
+                reader.poll(now, since, wall)
 
     def set_hold(self, hold: bool) -> None:
         """On the loop: hold the held readers' samples for ``deliver_held()``, or stop holding
-        (what waits is delivered in the next pass of the loop)."""
+        (what waits is delivered in the next pass of the loop, and the poll timer reads the
+        at_tick readers from then on)."""
         self.hold = hold
-        if not hold and not self.closed:
+        if hold:
+            if self._poll_handle is not None:
+                self._poll_handle.cancel()
+                self._poll_handle = None
+        elif not self.closed:
             self.loop.call_soon(self.deliver_held)
+            self._arm_poll()
+
+    def _arm_poll(self) -> None:
+        if self._poll_handle is None and self._polled and not self.hold and not self.closed:
+            self._poll_handle = self.loop.call_later(POLL_PERIOD, self._on_poll_timer)
+
+    def _on_poll_timer(self) -> None:
+        self._poll_handle = None
+        if self.closed or self.hold:
+            return
+        self.deliver_held()
+        self._arm_poll()
 
     def _drain(self) -> None:
         self._held_since = None
@@ -211,9 +243,13 @@ class DdsNode:
         return ".".join(f"{b:02x}" for b in raw)
 
     def reader(self, dds_name: str, data_type: type, qos: QosProfile,
-               on_samples: Callable[[list, float], None], *, user_data: str | None = None) -> Reader:
-        reader = Reader(self, dds_name, data_type, qos, on_samples, user_data=user_data)
+               on_samples: Callable[[list, float], None], *, user_data: str | None = None,
+               at_tick: bool = False) -> Reader:
+        reader = Reader(self, dds_name, data_type, qos, on_samples, user_data=user_data, at_tick=at_tick)
         self._readers.append(reader)
+        if reader.polled:
+            self._polled.append(reader)
+            self._arm_poll()
         return reader
 
     def writer(self, dds_name: str, data_type: type, qos: QosProfile, *, user_data: str | None = None) -> DataWriter:
@@ -224,8 +260,8 @@ class DdsNode:
 
     # -- ROS-level helpers ------------------------------------------------------------------------
     def subscription(self, name: str, data_type: type, qos: QosProfile,
-                     on_samples: Callable[[list, float], None]) -> Reader:
-        return self.reader("rt" + self.fq(name), data_type, qos, on_samples)
+                     on_samples: Callable[[list, float], None], *, at_tick: bool = False) -> Reader:
+        return self.reader("rt" + self.fq(name), data_type, qos, on_samples, at_tick=at_tick)
 
     def publisher(self, name: str, data_type: type, qos: QosProfile = DEFAULT) -> DataWriter:
         return self.writer("rt" + self.fq(name), data_type, qos)
@@ -235,6 +271,9 @@ class DdsNode:
         if self.closed:
             return
         self.closed = True
+        if self._poll_handle is not None:
+            self._poll_handle.cancel()
+            self._poll_handle = None
         for reader in self._readers:
             reader.closed = True
         with contextlib.suppress(Exception):
@@ -254,18 +293,20 @@ class Reader:
     """
 
     def __init__(self, node: DdsNode, dds_name: str, data_type: type, qos: QosProfile,
-                 on_samples: Callable[[list, float], None], *, user_data: str | None = None):
+                 on_samples: Callable[[list, float], None], *, user_data: str | None = None,
+                 at_tick: bool = False):
         self.node = node
         self.name = dds_name
         self.on_samples = on_samples
         self.received = 0
         self.malformed = 0
         self.closed = False
-        self.held = False  # samples wait for the tick while the node holds (DdsNode.post)
+        self.held = at_tick  # (listener) samples wait for the tick while the node holds (DdsNode.post)
+        self.polled = at_tick and ddspy_take is not None  # no listener: read by DdsNode.deliver_held
         loop = node.loop
         self._loop = loop
         self._decode = cdr.decoder(data_type)
-        self._listener = Listener(on_data_available=self._on_data_available)
+        self._listener = None if self.polled else Listener(on_data_available=self._on_data_available)
         self.reader = DataReader(node.participant, node.topic(dds_name, data_type),
                                  qos=qos.to_dds(user_data=user_data), listener=self._listener)
 
@@ -311,6 +352,34 @@ class Reader:
                 except Exception:
                     self.malformed += 1
         return len(taken), valid
+
+    def poll(self, now: float, since: float, wall: float) -> None:  # on the loop
+        """Take and deliver what waits (a polled reader), each sample stamped with its source
+        timestamp on the loop clock (``wall``: ``time.time()`` at ``now``), clamped to
+        [``since``, ``now``]: it arrived after the previous read and before this one."""
+        if self.closed:
+            return
+        ref, decode = self.reader._ref, self._decode
+        for _ in range(_MAX_TAKE_FAILURES):
+            try:
+                taken = ddspy_take(ref, _ANY_STATE, _TAKE_BATCH)
+            except Exception:  # a sample that does not deserialise: drop it, count it
+                self.malformed += 1
+                continue
+            if type(taken) is int or not taken:
+                return
+            for data, info in taken:
+                if not info.valid_data:  # (only tells of a disposed instance)
+                    continue
+                try:
+                    sample = decode(data)
+                except Exception:
+                    self.malformed += 1
+                    continue
+                stamp = now - (wall - info.source_timestamp * 1e-9)
+                self._deliver([sample], since if stamp < since else (now if stamp > now else stamp))
+            if len(taken) < _TAKE_BATCH:
+                return
 
     def _deliver(self, samples: list, now: float) -> None:  # on the loop
         if self.closed:

@@ -119,11 +119,9 @@ class Ros2Driver:
             if topic is None:
                 continue
             self._readers[stream] = node.subscription(topic.name, msg_type, _qos(topic.qos),
-                                                      self._stream_handler(stream, convert))
-        for stream in cfg.deliver_at_tick:
-            if stream in self._readers:
-                self._readers[stream].held = True
-        node.hold = self._hold
+                                                      self._stream_handler(stream, convert),
+                                                      at_tick=stream in cfg.deliver_at_tick)
+        node.set_hold(self._hold)
         self._open_mux_topics()
         cmd = t.cmd_vel
         self._cmd_type = idl.TwistStamped if cmd.stamped else idl.Twist

@@ -100,3 +100,50 @@ def test_the_gates_streams_cannot_wait_for_the_tick(stream):
 
 def test_imu_and_odom_wait_for_the_tick_by_default():
     assert Ros2Config().deliver_at_tick == ["imu", "odom"]
+
+
+def test_an_at_tick_reader_is_read_by_the_tick_while_held_and_by_a_timer_otherwise(loopback):
+    """The real reader: no listener; while the node holds, nothing arrives until the tick's
+    deliver_held(), and each sample is stamped between the previous read and this one; without
+    hold, a timer reads it every POLL_PERIOD."""
+    from bt_runtime.runtime.ros2 import idl
+
+    if dds.ddspy_take is None:
+        pytest.skip("this Cyclone binding has no ddspy_take: at_tick readers keep their listener")
+    qos = dds.QosProfile(reliable=True, depth=100)
+
+    async def main():
+        loop = asyncio.get_running_loop()
+        node = dds.DdsNode(dds_domain(), loop=loop)
+        got: list = []
+        try:
+            reader = node.subscription("at_tick_imu", idl.Imu, qos, lambda samples, now: got.extend(
+                (s.header.stamp.sec, now) for s in samples), at_tick=True)
+            assert reader.polled
+            writer = node.publisher("at_tick_imu", idl.Imu, qos)
+            deadline = loop.time() + 10
+            while not writer.get_matched_subscriptions():
+                assert loop.time() < deadline, "reader and writer did not match"
+                await asyncio.sleep(0.01)
+            node.set_hold(True)
+            node.deliver_held()
+            since = loop.time()
+            for i in range(5):
+                writer.write(idl.Imu(header=idl.Header(stamp=idl.Time(i, 0), frame_id="imu")))
+            await asyncio.sleep(0.1)
+            assert got == []  # held: no listener, no timer
+            node.deliver_held()
+            now = loop.time()
+            assert [sec for sec, _ in got] == [0, 1, 2, 3, 4]
+            assert all(since <= stamp <= now for _, stamp in got)
+            got.clear()
+            node.set_hold(False)
+            writer.write(idl.Imu(header=idl.Header(stamp=idl.Time(9, 0), frame_id="imu")))
+            deadline = loop.time() + 2
+            while not got and loop.time() < deadline:
+                await asyncio.sleep(0.005)
+            assert [sec for sec, _ in got] == [9]
+        finally:
+            node.close()
+
+    run(main)
