@@ -125,13 +125,21 @@ class WhileDoElseNode(ControlNode):
         if cond is RUNNING:
             return RUNNING
         status = IDLE
+        take = 0  # the branch to tick: 1 (then) on SUCCESS, 2 (else, if any) on FAILURE
         if cond is SUCCESS:
+            take = 1
+        elif cond is FAILURE:
             if n == 3:
-                cell = cells[2]  # halt_child(2), inlined
+                take = 2
+            else:
+                status = FAILURE
+        if take:
+            if n == 3:
+                cell = cells[3 - take]  # halt_child(the other branch), inlined
                 if cell.status is RUNNING:
                     cell.node.halt_node()
                 cell.status = IDLE
-            cell = cells[1]
+            cell = cells[take]
             # -- status = tick_cell(cell) (child.execute_tick()), inlined for speed ----------------
             fast = cell.fast
             try:
@@ -147,30 +155,6 @@ class WhileDoElseNode(ControlNode):
                     cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
                 cell.status = status
             # ---------------------------------------------------------------------------------------
-        elif cond is FAILURE:
-            if n == 3:
-                cell = cells[1]  # halt_child(1), inlined
-                if cell.status is RUNNING:
-                    cell.node.halt_node()
-                cell.status = IDLE
-                cell = cells[2]
-                # -- status = tick_cell(cell) (child.execute_tick()), inlined for speed ----------------
-                fast = cell.fast
-                try:
-                    status = fast(cell.node)
-                except NodeExecutionError:
-                    raise
-                except Exception as exc:
-                    if _is_execute_tick(fast, cell.node):  # execute_tick's own error
-                        raise
-                    raise _wrap_error(cell, exc) from exc
-                if status is not SKIPPED:
-                    if status is IDLE:
-                        cell.node.set_status(status)  # raises, as BT.CPP's setStatus(IDLE) does
-                    cell.status = status
-                # ---------------------------------------------------------------------------------------
-            else:
-                status = FAILURE
         if status is RUNNING:
             return RUNNING
         for cell in cells:  # reset_children(), inlined for speed
