@@ -50,6 +50,18 @@ class _ScriptHolder:
     __slots__ = ()  # the nodes hold _code_text, _script, _code_from_blackboard in slots
     _kind = "Script"
 
+    def __init__(self, name: str, config: NodeConfig):
+        if type(self) in _PLAIN_INIT:  # super().__init__ is TreeNode's: called without super()'s cost
+            if self._literal_script(config):  # (then TreeNode.__init__ picks the script's tick)
+                TreeNode.__init__(self, name, config)
+                return
+            TreeNode.__init__(self, name, config)
+        else:
+            self._script = None  # see _bare_tick
+            super().__init__(name, config)
+        self._init_script()
+        self._use_script_tick()
+
     def _literal_script(self, config: NodeConfig | None) -> bool:
         """Compile a literal ``code`` before the node is initialised (True), so that
         ``TreeNode.__init__`` picks the script's own tick at once; otherwise (no config, no
@@ -121,18 +133,6 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
     def provided_ports(cls):
         return [input_port("code", str, description="Piece of code that can be parsed")]
 
-    def __init__(self, name: str, config: NodeConfig):
-        if type(self) in _PLAIN_INIT:  # super().__init__ is TreeNode's: called without super()'s cost
-            if self._literal_script(config):  # (then TreeNode.__init__ picks the script's tick)
-                TreeNode.__init__(self, name, config)
-                return
-            TreeNode.__init__(self, name, config)
-        else:
-            self._script = None  # see _bare_tick
-            super().__init__(name, config)
-        self._init_script()
-        self._use_script_tick()
-
     def tick(self) -> NodeStatus:
         if self._code_from_blackboard:
             self._load()
@@ -154,18 +154,6 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
         return [input_port("code", ANYTYPE,
                            description="Piece of code that can be parsed. Must return false or true")]
 
-    def __init__(self, name: str, config: NodeConfig):
-        if type(self) in _PLAIN_INIT:  # (as ScriptNode)
-            if self._literal_script(config):
-                TreeNode.__init__(self, name, config)
-                return
-            TreeNode.__init__(self, name, config)
-        else:
-            self._script = None  # see _bare_tick
-            super().__init__(name, config)
-        self._init_script()
-        self._use_script_tick()
-
     def tick(self) -> NodeStatus:
         if self._code_from_blackboard:
             self._load()
@@ -177,7 +165,9 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
 
 
 def _next_init(cls: type) -> object:
-    return next(k.__dict__["__init__"] for k in cls.__mro__[1:] if "__init__" in k.__dict__)
+    """The constructor ``super().__init__`` reaches from ``_ScriptHolder.__init__``."""
+    mro = cls.__mro__
+    return next(k.__dict__["__init__"] for k in mro[mro.index(_ScriptHolder) + 1:] if "__init__" in k.__dict__)
 
 
 # The script node classes whose super().__init__ is TreeNode.__init__ (checked, not assumed:
