@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import operator
 import re
-import weakref
+from contextlib import suppress
 from functools import lru_cache, partial
 from typing import Any
 
@@ -19,7 +19,13 @@ from ..ports import EMPTY
 from ..status import FAILURE, SUCCESS
 from .assign import make_assign, make_bad_assign
 from .errors import CastError, ScriptError, ScriptRuntimeError
-from .node_ticks import condition_node_tick, script_node_tick, shape_condition_tick, shape_node_tick
+from .node_ticks import (
+    NAMES_IN_SHAPE,
+    action_maker,
+    condition_maker,
+    condition_node_tick,
+    script_node_tick,
+)
 from .operators import binary, compare, ieee_div, unary
 from .parser import Assign, Binary, Compare, Literal, Name, Node, ParseError, Ternary, Unary, parse
 from .shortcuts import shortcut_assign
@@ -380,45 +386,59 @@ _EMITTERS: dict[type, Any] = {Literal: _emit_literal, Name: _emit_name, Unary: _
 
 # --- templates: scripts that differ only in their variable names share one parse ---------------
 
-# A run of identifier characters where the lexer starts an identifier token (not inside a number
-# such as 1e5, 0x1f or the error token 3foo, which the look-behind leaves alone).
-_IDENTIFIER = re.compile(r"(?<![A-Za-z0-9_@.])([A-Za-z_][A-Za-z0-9_]*)")  # split() keeps the names
-# Texts the template path leaves to the plain parse: string literals and '@' (identifiers inside
-# them), non-ASCII, and an identifier right after a dot ('a..b', '65.x'), which the look-behind
-# would leave unrenamed where it could collide with a placeholder. All of these stay in the
-# text between the names the split finds, so the key is tested (shorter, and no extra pass).
-_DOT_NAME = re.compile(r"\.[A-Za-z_]")
+# A run of identifier characters where the lexer starts an identifier token: after a character
+# that is not one of [A-Za-z0-9_] (\b, ASCII), so not inside a number such as 1e5, 0x1f or the
+# error token 3foo. The split keeps the names.
+_IDENTIFIER = re.compile(r"(?a)\b([A-Za-z_]\w*)")
 _MARK = "\x00"  # stands for a variable in a template's key (the text itself never contains it)
-_templates: dict[str, _Template | None] = {}  # key -> the template, None when the key has none
+# key -> the template, None when the key has none: texts the template path leaves to the plain
+# parse (string literals and '@', with identifiers inside them; non-ASCII; an identifier right
+# after a dot, as in 'a..b' or '65.x', which the lexer may read as part of a number), and keys
+# whose template does not parse. All of these show in the key, which is tested once.
+_templates: dict[str, _Template | None] = {}
 _TEMPLATES_KEPT = 4096
-
-# The shapes (shortcuts.py, compiler._compare_one) a one-statement template may have that a
-# Script/ScriptCondition node ticks in one call (node_ticks.py), and how many variable names
-# follow the kind in the shape tuple.
-_NAMES_IN_SHAPE = {"update": 1, "arith": 2, "constant": 1, "copy": 2, "order": 1}
 
 
 class _Template:
     """The folded statements of a template (variables renamed ``_0``, ``_1``... in order of
     appearance), its placeholders, and for a one-statement template with a one-call node
     tick its ``form``: the compiled statement's ``shape`` with each variable name replaced by
-    its placeholder's index. With a form, a script of the template needs no closure to be
-    ticked by a node (``Script.action_tick``); its closure is compiled on first need.
-    ``form`` is (kind, index of the first name, index of the second or None, the rest)."""
+    its placeholder's index, and the makers of that tick for a Script and a ScriptCondition
+    node (node_ticks.action_maker: ``f(*names) -> tick``). With a form, a script of the
+    template needs no closure to be ticked by a node (``Script.action_tick``); its closure is
+    compiled on first need. ``form`` is (kind, index of the first name, index of the second
+    or None, the rest)."""
 
-    __slots__ = ("statements", "placeholders", "form")
+    __slots__ = ("statements", "placeholders", "form", "make_action", "make_condition")
 
     def __init__(self, statements: list[Node], placeholders: tuple[str, ...]):
         self.statements = statements
         self.placeholders = placeholders
-        self.form = None
+        self.form = self.make_action = self.make_condition = None
         if len(statements) == 1:
             shape = getattr(_emit(statements[0], {}), "shape", None)
-            count = _NAMES_IN_SHAPE.get(shape[0]) if shape is not None else None
+            count = NAMES_IN_SHAPE.get(shape[0]) if shape is not None else None
             if count is not None:
                 index = {p: i for i, p in enumerate(placeholders)}
-                self.form = ((shape[0], index[shape[1]], None, shape[2:]) if count == 1 else
-                             (shape[0], index[shape[1]], index[shape[2]], shape[3:]))
+                kind, rest = shape[0], shape[1 + count:]
+                self.form = (kind, index[shape[1]], None if count == 1 else index[shape[2]], rest)
+                self.make_action = action_maker(kind, rest, _action_slow)
+                self.make_condition = condition_maker(kind, rest, _condition_slow)
+
+
+def _new_template(key: str) -> _Template | None:
+    """The template of ``key`` (see _templates), made and kept."""
+    template = None
+    if not ("'" in key or "@" in key or not key.isascii() or ".\x00" in key):
+        pieces = key.split(_MARK)
+        placeholders = tuple(f"_{i}" for i in range(len(pieces) - 1))
+        text_of_template = pieces[0] + "".join(p + piece for p, piece in zip(placeholders, pieces[1:]))
+        with suppress(ParseError, RecursionError):  # (the plain parse reports the error)
+            template = _Template([_fold_all(s) for s in parse(text_of_template)], placeholders)
+    if len(_templates) >= _TEMPLATES_KEPT:
+        _templates.clear()
+    _templates[key] = template
+    return template
 
 
 def _template_of(text: str) -> tuple[_Template, list[str]] | None:
@@ -431,24 +451,13 @@ def _template_of(text: str) -> tuple[_Template, list[str]] | None:
         return None
     parts = _IDENTIFIER.split(text)  # [text, name, text, name, ..., text]: one pass
     key = _MARK.join(parts[0::2])
-    if "'" in key or "@" in key or not key.isascii() or ("." in key and _DOT_NAME.search(key) is not None):
+    template = _templates.get(key, EMPTY)
+    if template is EMPTY:
+        template = _new_template(key)
+    if template is None:
         return None
     found = parts[1::2]
     if "true" in found or "false" in found:  # literals, not variables: no template
-        return None
-    template = _templates.get(key, EMPTY)
-    if template is EMPTY:
-        pieces = key.split(_MARK)
-        placeholders = tuple(f"_{i}" for i in range(len(pieces) - 1))
-        text_of_template = pieces[0] + "".join(p + piece for p, piece in zip(placeholders, pieces[1:]))
-        try:
-            template = _Template([_fold_all(s) for s in parse(text_of_template)], placeholders)
-        except (ParseError, RecursionError):
-            template = None
-        if len(_templates) >= _TEMPLATES_KEPT:
-            _templates.clear()
-        _templates[key] = template
-    if template is None:
         return None
     return template, found
 
@@ -486,12 +495,13 @@ class Script:
 
     A script of one statement that a node ticks in one call (``x := x + 1``, ``x > 0``: its
     template has a ``form``) is made without its closure: a Script or ScriptCondition node
-    holding it ticks through ``node_ticks`` and needs the closure only when that tick hands
-    over (an entry not found, or of another kind), which is rare; the closure is compiled then,
-    or when ``run`` or ``_fn`` is first used. The first tick of a node finds its entries
-    (``_resolve``) and ticks again without the closure. Such a tick calls back into the script,
-    so the script holds it weakly (the nodes hold it): no reference cycle, a dropped tree's
-    scripts are freed by reference counting."""
+    holding it (as ``node._script``) ticks through ``node_ticks`` and needs the closure only
+    when that tick hands over (an entry not found, or of another kind), which is rare; the
+    closure is compiled then, or when ``run`` or ``_fn`` is first used. The first tick of a
+    node finds its entries (``_resolve``) and ticks again without the closure. Such a tick
+    hands over to ``_action_slow``/``_condition_slow``, which reach the script through the
+    node, so the script may keep its tick: no reference cycle, a dropped tree's scripts are
+    freed by reference counting."""
 
     __slots__ = ("text", "_compiled", "_action_tick", "_condition_tick", "_template", "_names")
 
@@ -499,17 +509,6 @@ class Script:
         self.text = text
         self._compiled = fn
         self._action_tick = self._condition_tick = self._template = self._names = None
-
-    @classmethod
-    def _of_template(cls, text: str, template: _Template, names: list[str]) -> Script:
-        """The script ``text`` of ``template`` (which has a form), ``names`` the variables its
-        placeholders stand for; its closure is compiled on first need."""
-        self = _new_object(cls)
-        self.text = text
-        self._compiled = self._action_tick = self._condition_tick = None
-        self._template = template
-        self._names = names
-        return self
 
     @property
     def _fn(self) -> Fn:
@@ -521,12 +520,6 @@ class Script:
         names = dict(zip(template.placeholders, self._names))
         fn = self._compiled = _emit(template.statements[0], names)
         return fn
-
-    def _shape(self) -> tuple:
-        """The compiled statement's ``shape`` (as ``_fn.shape``), made from the template's form."""
-        kind, first, second, rest = self._template.form
-        names = self._names
-        return (kind, names[first], *rest) if second is None else (kind, names[first], names[second], *rest)
 
     def _resolve(self, node: Any) -> bool:
         """Find the entries the statement's one-call tick reads that the node's blackboard has
@@ -545,57 +538,40 @@ class Script:
                 found_new = True
         return found_new
 
-    def _action_slow(self, node: Any) -> Any:
-        """What the one-call tick of a script without its closure hands over to."""
-        fn = self._compiled
-        if fn is None:
-            if self._resolve(node):
-                return _held(self._action_tick)(node)
-            fn = self._compile()
-        return _run_action(fn, self.text, node)
-
-    def _condition_slow(self, node: Any) -> Any:
-        fn = self._compiled
-        if fn is None:
-            if self._resolve(node):
-                return _held(self._condition_tick)(node)
-            fn = self._compile()
-        return _run_condition(fn, self.text, node)
+    def _form_tick(self, make: Any) -> Any:
+        """The one-call tick ``make`` (a template's maker) makes for this script's names."""
+        _, first, second, _ = self._template.form
+        names = self._names
+        return make(names[first]) if second is None else make(names[first], names[second])
 
     def action_tick(self) -> Any:
         """``f(node) -> SUCCESS`` that runs the script on the node's blackboard, errors reported
         as ``run`` reports them: the whole tick of a Script node in one call (shared by every
         node with this text; node_ticks.py makes a one-frame one for the commonest statements)."""
-        tick = _held(self._action_tick)
+        tick = self._action_tick
         if tick is None:
-            if self._compiled is None:
-                tick = shape_node_tick(self._shape(), self._action_slow, self.text)
-                if tick is not None:
-                    self._action_tick = _WeakRef(tick)  # (it calls back: see the class)
-                    return tick
+            if self._compiled is None and self._template.make_action is not None:
+                tick = self._form_tick(self._template.make_action)
             else:
-                general = partial(_run_action, self._compiled, self.text)
-                tick = script_node_tick(self._compiled, general, self.text)
-            if tick is None:
-                tick = partial(_run_action, self._fn, self.text)
+                fn = self._fn
+                tick = script_node_tick(fn, partial(_run_action, fn, self.text), self.text)
+                if tick is None:
+                    tick = partial(_run_action, fn, self.text)
             self._action_tick = tick
         return tick
 
     def condition_tick(self) -> Any:
         """``f(node) -> SUCCESS | FAILURE``: ``run_bool`` on the node's blackboard, the whole
         tick of a ScriptCondition node in one call."""
-        tick = _held(self._condition_tick)
+        tick = self._condition_tick
         if tick is None:
-            if self._compiled is None:
-                tick = shape_condition_tick(self._shape(), self._condition_slow)
-                if tick is not None:
-                    self._condition_tick = _WeakRef(tick)
-                    return tick
+            if self._compiled is None and self._template.make_condition is not None:
+                tick = self._form_tick(self._template.make_condition)
             else:
-                general = partial(_run_condition, self._compiled, self.text)
-                tick = condition_node_tick(self._compiled, general)
-            if tick is None:
-                tick = partial(_run_condition, self._fn, self.text)
+                fn = self._fn
+                tick = condition_node_tick(fn, partial(_run_condition, fn, self.text))
+                if tick is None:
+                    tick = partial(_run_condition, fn, self.text)
             self._condition_tick = tick
         return tick
 
@@ -623,13 +599,30 @@ class Script:
         return f"Script({self.text!r})"
 
 
+def _action_slow(node: Any) -> Any:
+    """What the one-call tick of a Script node whose script has no closure yet hands over to:
+    find the entries and tick again, or compile the closure and run the general tick."""
+    script = node._script
+    fn = script._compiled
+    if fn is None:
+        if script._resolve(node):
+            return script._action_tick(node)
+        fn = script._compile()
+    return _run_action(fn, script.text, node)
+
+
+def _condition_slow(node: Any) -> Any:
+    """``_action_slow`` for a ScriptCondition node."""
+    script = node._script
+    fn = script._compiled
+    if fn is None:
+        if script._resolve(node):
+            return script._condition_tick(node)
+        fn = script._compile()
+    return _run_condition(fn, script.text, node)
+
+
 _new_object = object.__new__
-_WeakRef = weakref.ref
-
-
-def _held(tick: Any) -> Any:
-    """A tick kept by a Script (itself, or through a weak reference), or None."""
-    return tick() if type(tick) is _WeakRef else tick
 
 
 @lru_cache(maxsize=4096)
@@ -642,8 +635,13 @@ def compile_script(text: str) -> Script:
         hit = _template_of(text)
         if hit is not None:
             template, names = hit
-            if template.form is not None:
-                return Script._of_template(text, template, names)
+            if template.form is not None:  # made without its closure (see Script)
+                script = _new_object(Script)
+                script.text = text
+                script._compiled = script._action_tick = script._condition_tick = None
+                script._template = template
+                script._names = names
+                return script
             statements = template.statements
             renaming = dict(zip(template.placeholders, names))
             fn = (_emit(statements[0], renaming) if len(statements) == 1

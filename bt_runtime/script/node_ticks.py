@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import operator
 from collections.abc import Callable
+from functools import partial
 from time import monotonic_ns as _monotonic_ns
 from typing import Any
 
@@ -36,15 +37,10 @@ def shape_node_tick(shape: tuple, slow: NodeTick, text: str = "") -> NodeTick | 
     kind = shape[0]
     if kind == "sequence":
         return _statements(shape[1], text)
-    if kind == "update":
-        return _update(*shape[1:], slow)
-    if kind == "arith":
-        return _arith(*shape[1:], slow)
-    if kind == "constant":
-        return _constant(*shape[1:], slow)
-    if kind == "copy":
-        return _copy(*shape[1:], slow)
-    return None
+    names = NAMES_IN_SHAPE.get(kind)
+    if names is None:
+        return None
+    return _ACTION_MAKERS[kind](*shape[1 + names:], slow, *shape[1:1 + names])
 
 
 def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
@@ -58,7 +54,27 @@ def shape_condition_tick(shape: tuple, slow: NodeTick) -> NodeTick | None:
     if shape[0] != "order":
         return None
     _, key, fails, number = shape
+    return _order(fails, number, slow, key)
 
+
+def action_maker(kind: str, rest: tuple, slow: NodeTick) -> Callable[..., NodeTick] | None:
+    """``f(*names) -> the one-call tick`` of a Script node holding a statement of this kind
+    (``shape`` = (kind, *names, *rest)), ``slow`` fixed; None when the kind has none. Worked out
+    once per script template: making a node's tick is then one call."""
+    make = _ACTION_MAKERS.get(kind)
+    return None if make is None else partial(make, *rest, slow)
+
+
+def condition_maker(kind: str, rest: tuple, slow: NodeTick) -> Callable[..., NodeTick] | None:
+    """``action_maker`` for a ScriptCondition node."""
+    return partial(_order, *rest, slow) if kind == "order" else None
+
+
+# The statement shapes with a one-call tick: how many variable names follow the kind.
+NAMES_IN_SHAPE = {"update": 1, "arith": 2, "constant": 1, "copy": 2, "order": 1}
+
+
+def _order(fails: Callable[[float, float], bool], number: float, slow: NodeTick, key: str) -> NodeTick:
     def order_tick(node, key=key, fails=fails, number=number, slow=slow):
         cfg = node.config
         entry = cfg.blackboard._resolved.get(key)
@@ -90,7 +106,7 @@ def _statements(fns: tuple, text: str) -> NodeTick:
     return statements_tick
 
 
-def _update(key: str, arith: Callable[[float, float], float], number: float, slow: NodeTick) -> NodeTick:
+def _update(arith: Callable[[float, float], float], number: float, slow: NodeTick, key: str) -> NodeTick:
     if arith is operator.add:
         def add_tick(node, key=key, number=number, slow=slow):
             entry = node.config.blackboard._resolved.get(key)
@@ -117,8 +133,8 @@ def _update(key: str, arith: Callable[[float, float], float], number: float, slo
     return update_tick
 
 
-def _arith(key: str, source: str, arith: Callable[[float, float], float], number: float,
-           slow: NodeTick) -> NodeTick:
+def _arith(arith: Callable[[float, float], float], number: float, slow: NodeTick, key: str,
+           source: str) -> NodeTick:
     if arith is operator.add and key == source:
         def increment_tick(node, key=key, number=number, slow=slow):  # x := x + C: one look-up
             cfg = node.config
@@ -189,7 +205,7 @@ def _arith(key: str, source: str, arith: Callable[[float, float], float], number
     return arith_tick
 
 
-def _constant(key: str, kind: type, constant: Any, slow: NodeTick) -> NodeTick:
+def _constant(kind: type, constant: Any, slow: NodeTick, key: str) -> NodeTick:
     def constant_tick(node, key=key, kind=kind, constant=constant, slow=slow):
         entry = node.config.blackboard._resolved.get(key)
         if entry is not None and type(entry.value) is kind:
@@ -201,7 +217,7 @@ def _constant(key: str, kind: type, constant: Any, slow: NodeTick) -> NodeTick:
     return constant_tick
 
 
-def _copy(key: str, source: str, slow: NodeTick) -> NodeTick:
+def _copy(slow: NodeTick, key: str, source: str) -> NodeTick:
     def copy_tick(node, key=key, source=source, slow=slow):
         cfg = node.config
         resolved = cfg.blackboard._resolved
@@ -219,3 +235,8 @@ def _copy(key: str, source: str, slow: NodeTick) -> NodeTick:
                     return SUCCESS
         return slow(node)
     return copy_tick
+
+
+# kind -> maker(*rest, slow, *names): the tick of a Script node holding a statement of that
+# shape (the makers take the variable names last, so a partial of the rest makes them in one call)
+_ACTION_MAKERS = {"update": _update, "arith": _arith, "constant": _constant, "copy": _copy}

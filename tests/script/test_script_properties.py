@@ -150,7 +150,9 @@ def _plain(text: str):
 
 
 SHARED = ["a := a + 1", "b := b + 1", "x1 := x1 * 2; y := x1 > 3", "new := 0x1f + 1e2", "a > 1 ? b : a",
-          "3foo + a", "a..b", "65.x", "a := 'b'", "_p += 1", "flag && a", "true + a", "trueish := 1"]
+          "3foo + a", "a..b", "65.x", "a := 'b'", "_p += 1", "flag && a", "true + a", "trueish := 1",
+          "1.e5 + a", "a.b", "a := b.5", ".5x + a", "a@b", "1e5x + a", "0x1fz", "_a1 := 1.5e-3 * _a1", "a := @b",
+          "x1:=x1+1", "a := 1.5.x"]
 
 
 @settings(derandomize=True, max_examples=600, deadline=None)
