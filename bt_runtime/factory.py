@@ -81,12 +81,12 @@ class BehaviorTreeFactory:
     def register_simple_action(self, name: str, fn: Callable[[TreeNode], NodeStatus],
                                ports: Iterable[PortInfo] = ()) -> None:
         manifest = TreeNodeManifest(name, NodeType.ACTION, ports_dict(ports))
-        self.register_builder(manifest, lambda n, c: SimpleActionNode(n, c, fn))
+        self.register_builder(manifest, SimpleActionNode.builder(fn))
 
     def register_simple_condition(self, name: str, fn: Callable[[TreeNode], NodeStatus],
                                   ports: Iterable[PortInfo] = ()) -> None:
         manifest = TreeNodeManifest(name, NodeType.CONDITION, ports_dict(ports))
-        self.register_builder(manifest, lambda n, c: SimpleConditionNode(n, c, fn))
+        self.register_builder(manifest, SimpleConditionNode.builder(fn))
 
     def register_simple_stateful_action(self, name: str, on_start: Callable[[TreeNode], NodeStatus],
                                         on_running: Callable[[TreeNode], NodeStatus],

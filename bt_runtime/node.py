@@ -47,7 +47,7 @@ class NodeConfig:
     are created on first use (reading one returns a dict you may fill).
     """
 
-    __slots__ = ("blackboard", "enums", "input_ports", "output_ports", "manifest", "uid", "path",
+    __slots__ = ("blackboard", "enums", "input_ports", "output_ports", "manifest", "uid", "_path", "_name",
                  "_pre", "_post", "_other", "context", "wake_up", "timers", "clock",
                  "registration_id", "_file", "_line", "_doc", "_tag")
 
@@ -68,7 +68,8 @@ class NodeConfig:
         self.output_ports = output_ports if output_ports is not None else {}
         self.manifest = manifest
         self.uid = uid
-        self.path = path
+        self._path = path
+        self._name = None
         self._pre = self._post = self._other = None
         self.context = context
         self.wake_up: WakeUpSignal = wake_up
@@ -81,8 +82,9 @@ class NodeConfig:
 
     @classmethod
     def _for_node(cls, blackboard: Blackboard, enums: dict[str, int], manifest: TreeNodeManifest,
-                  uid: int, path: str, context: Any, wake_up: WakeUpSignal, timers: TimerQueue,
-                  clock: Callable[[], float], doc: Any, sourceline: int | None, tag: str) -> NodeConfig:
+                  uid: int, path: str, name: str | None, context: Any, wake_up: WakeUpSignal,
+                  timers: TimerQueue, clock: Callable[[], float], doc: Any, sourceline: int | None,
+                  tag: str) -> NodeConfig:
         """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
         positional arguments (much cheaper than the keyword call, once per node).
 
@@ -92,7 +94,11 @@ class NodeConfig:
 
         The source line is kept as the parser's raw ``sourceline`` with its document and tag,
         resolved to the line of the start tag only if someone asks (``source``): no per-node
-        object and no reference to the lxml element."""
+        object and no reference to the lxml element.
+
+        With a ``name``, ``path`` is the prefix of the node's path: the full path (prefix, name,
+        and ``::uid`` for a node named after its type) is joined when first read (``path``),
+        which few nodes are; the join and the uid's formatting cost more than the rest of this."""
         self = _new_object(cls)
         self.blackboard = blackboard
         self.enums = enums
@@ -103,7 +109,8 @@ class NodeConfig:
             self.input_ports = self.output_ports = _NO_PORTS
         self.manifest = manifest
         self.uid = uid
-        self.path = path
+        self._path = path
+        self._name = name
         self._pre = self._post = self._other = None
         self.context = context
         self.wake_up = wake_up
@@ -115,6 +122,22 @@ class NodeConfig:
         self._doc = doc
         self._tag = tag
         return self
+
+    @property
+    def path(self) -> str:
+        """The node's full path (``Main/sub/Sequence::3``), joined on first use (``_for_node``)."""
+        name = self._name
+        if name is None:
+            return self._path
+        path = self._path = (self._path + name + f"::{self.uid}" if name == self.registration_id
+                             else self._path + name)
+        self._name = None
+        return path
+
+    @path.setter
+    def path(self, value: str) -> None:
+        self._path = value
+        self._name = None
 
     @property
     def source(self) -> tuple[str | None, int | None]:
@@ -304,11 +327,10 @@ class TreeNode:
         if config._pre or config._post:
             self._select_execute_tick()
         else:  # _select_execute_tick() without hooks, inlined: this runs once per node built
-            cls = type(self)
-            bare = _bare_by_class.get(cls)
-            if bare is None:  # (once per class: both are class attributes)
-                bare = _bare_by_class[cls] = bool(cls._bare_tick_ok and cls.execute_tick in _LIBRARY_EXECUTE_TICKS)
-            cell.fast = self._bare_tick() if bare else cls.execute_tick
+            fast = _fast_by_class.get(type(self))
+            if fast is None:
+                fast = _class_fast(self)
+            cell.fast = fast if fast is not _PER_NODE else self._bare_tick()
 
     # -- declaration ---------------------------------------------------------------------------
     @classmethod
@@ -759,6 +781,17 @@ class SimpleActionNode(SyncActionNode):
 
     _bare_tick_ok = True  # tick() makes the RUNNING check itself
 
+    @staticmethod
+    def builder(fn: Callable[[TreeNode], NodeStatus]) -> Callable[[str, NodeConfig], SimpleActionNode]:
+        """What ``register_simple_action`` registers: ``SimpleActionNode(n, c, fn)`` without
+        the type call and the ``__init__`` frames (once per node built)."""
+        def build(name: str, config: NodeConfig) -> SimpleActionNode:
+            node = _new_object(SimpleActionNode)
+            node._fn = fn
+            _tree_node_init(node, name, config)
+            return node
+        return build
+
     def tick(self) -> NodeStatus:
         cell = self._cell
         if cell.status is IDLE:
@@ -780,6 +813,17 @@ class SimpleConditionNode(ConditionNode):
             ConditionNode.__init__(self, name, config)
         else:
             super().__init__(name, config)
+
+    @staticmethod
+    def builder(fn: Callable[[TreeNode], NodeStatus]) -> Callable[[str, NodeConfig], SimpleConditionNode]:
+        """What ``register_simple_condition`` registers: ``SimpleConditionNode(n, c, fn)``
+        without the type call and the ``__init__`` frame (once per node built)."""
+        def build(name: str, config: NodeConfig) -> SimpleConditionNode:
+            node = _new_object(SimpleConditionNode)
+            node._fn = fn
+            _tree_node_init(node, name, config)
+            return node
+        return build
 
     def tick(self) -> NodeStatus:
         return self._fn(self)
@@ -1088,12 +1132,31 @@ class DecoratorNode(TreeNode):
         return status
 
 
+_tree_node_init = TreeNode.__init__
+
 # A class that overrides execute_tick (as BT.CPP allows: it is virtual) is always ticked
 # through it; the library's own overrides are known to be equivalent to the bare tick where
 # the class sets _bare_tick_ok.
 _LIBRARY_EXECUTE_TICKS = (TreeNode.execute_tick, SyncActionNode.execute_tick, DecoratorNode.execute_tick)
-# class -> whether its nodes without conditions or hooks take the bare tick (TreeNode.__init__)
-_bare_by_class: dict[type, bool] = {}
+# class -> what TreeNode.__init__ makes the cell's ``fast`` of its nodes without conditions or
+# hooks: the class's execute_tick, its bare tick, or _PER_NODE (ask the node's _bare_tick())
+_fast_by_class: dict[type, Callable[[TreeNode], NodeStatus]] = {}
+_PER_NODE: Any = object()
+
+
+def _class_fast(node: TreeNode) -> Callable[[TreeNode], NodeStatus]:
+    """``_fast_by_class`` of the node's class, worked out from its first node (both choices
+    depend on class attributes only; the bare tick is the same for every node when the class
+    that defines ``_bare_tick`` is TreeNode or says so with ``_bare_tick_per_class``)."""
+    cls = type(node)
+    if not (cls._bare_tick_ok and cls.execute_tick in _LIBRARY_EXECUTE_TICKS):
+        fast = cls.execute_tick
+    else:
+        owner = next(c for c in cls.__mro__ if "_bare_tick" in c.__dict__)
+        per_class = owner is TreeNode or owner.__dict__.get("_bare_tick_per_class", False)
+        fast = node._bare_tick() if per_class else _PER_NODE
+    _fast_by_class[cls] = fast
+    return fast
 
 
 class SimpleDecoratorNode(DecoratorNode):

@@ -16,6 +16,7 @@ from ..status import FAILURE, SUCCESS, NodeStatus
 
 class AlwaysSuccessNode(SyncActionNode):
     _bare_tick_ok = True  # never RUNNING: parents may call the bare tick
+    _bare_tick_per_class = True  # (_bare_tick() is the same for every node: see node._class_fast)
 
     def tick(self) -> NodeStatus:
         return SUCCESS
@@ -26,6 +27,7 @@ class AlwaysSuccessNode(SyncActionNode):
 
 class AlwaysFailureNode(SyncActionNode):
     _bare_tick_ok = True
+    _bare_tick_per_class = True
 
     def tick(self) -> NodeStatus:
         return FAILURE

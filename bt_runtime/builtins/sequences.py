@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..errors import LogicError, NodeExecutionError
-from ..node import ControlNode, NodeConfig, _is_execute_tick, _wrap_error
+from ..node import ControlNode, NodeConfig, TreeNode, _is_execute_tick, _wrap_error
 from ..status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 
 
@@ -298,14 +298,38 @@ class SequentialNode(ControlNode):
         ControlNode.halt(self)
 
 
+_new_node = object.__new__
+_tree_node_init = TreeNode.__init__
+
+
+def _sequential(name: str, config: NodeConfig | None, variant: tuple, asynch: bool) -> SequentialNode:
+    """``SequentialNode(name, config, fallback=..., asynch=...)``: the same stores as its
+    ``__init__`` and ControlNode's, in one frame. What the registered builders call, once per
+    node built: the type call through three ``__init__``s with keyword arguments costs about
+    as much as the rest of the node."""
+    self = _new_node(SequentialNode)
+    self._idx = 0
+    self._skipped = 0
+    self._advance_on, self._stop_on, self._all_done, self.kind = variant
+    self._asynch = asynch
+    self._cells = []
+    self._children = None
+    _tree_node_init(self, name, config)
+    return self
+
+
+_SEQUENCE, _ASYNC_SEQUENCE = _VARIANTS[False, False], _VARIANTS[False, True]
+_FALLBACK, _ASYNC_FALLBACK = _VARIANTS[True, False], _VARIANTS[True, True]
+
+
 def SequenceNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
     """Tick children in order; FAILURE stops and restarts from the first child next time."""
-    return SequentialNode(name, config)
+    return _sequential(name, config, _SEQUENCE, False)
 
 
 def AsyncSequenceNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
     """Like Sequence, but yields (RUNNING + wake-up) after each synchronous child success."""
-    return SequentialNode(name, config, asynch=True)
+    return _sequential(name, config, _ASYNC_SEQUENCE, True)
 
 
 class SequenceWithMemoryNode(ControlNode):
@@ -382,9 +406,9 @@ class SequenceWithMemoryNode(ControlNode):
 
 def FallbackNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
     """Tick children in order until one succeeds; FAILURE moves on to the next child."""
-    return SequentialNode(name, config, fallback=True)
+    return _sequential(name, config, _FALLBACK, False)
 
 
 def AsyncFallbackNode(name: str, config: NodeConfig | None = None) -> SequentialNode:  # noqa: N802
     """Like Fallback, but yields (RUNNING + wake-up) after each synchronous child failure."""
-    return SequentialNode(name, config, fallback=True, asynch=True)
+    return _sequential(name, config, _ASYNC_FALLBACK, True)

@@ -91,6 +91,12 @@ class TreeBuilder:
         self._literals_ok: set[tuple[int, str]] = set()
         self._subtree_plans: dict[tuple[str, tuple], tuple] = {}  # see _subtree_plan
         self._port_tables: dict[TreeNodeManifest, tuple] = {}  # see _port_table
+        self._types: dict[str, tuple] = {}  # see _type
+        # what every node's config gets, read once per build
+        self._enums = factory.enums
+        self._context = factory.context
+        self._clock = time.monotonic  # (clock_holder[0] while building)
+        self._substituting = bool(factory.substitution_rules)
 
     def build(self, tree_id: str, blackboard: Blackboard | None = None) -> Tree:
         """Build the tree ``tree_id``, the cyclic collector paused and the tree's objects put
@@ -148,32 +154,31 @@ class TreeBuilder:
         tag, type_id, name, items, attrs, conditions, sourceline, child_plans, elem = plan
         if tag == "SubTree":
             return self._build_subtree(plan, doc, record, prefix, stack)
-        factory = self.factory
-        manifests = factory.manifests
-        manifest = manifests.get(type_id)
-        if manifest is None:
-            raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
+        known = self._types.get(type_id)
+        if known is None:
+            known = self._type(type_id, doc, elem)
+        manifest, builder, defaults = known
         if name is None:
             name = type_id
         # (every forbidden character is unprintable; isprintable() costs far less than the search)
-        if not name.isprintable() and _BAD_INSTANCE_CHAR.search(name) is not None:
+        elif not name.isprintable() and _BAD_INSTANCE_CHAR.search(name) is not None:
             bad = self._check_instance_name(name)
             raise self._err(doc, elem, f"The instance name '{name!r}' contains the forbidden character {bad!r}")
         self._uid = uid = self._uid + 1  # _next_uid(), inlined
         if uid > 0xFFFF:
             raise XMLLoadError("Too many nodes: uids are 16-bit in BT.CPP (max 65535)")
-        path = prefix + name + (f"::{uid}" if name == type_id else "")
-        rule = factory.substitution_for(name, type_id, path) if factory.substitution_rules else None
-        builder = factory.builders[type_id] if rule is None else factory.substitution_builder(rule)
-        cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context,
-                           self.wake_up, self.timers, self.clock_holder[0], doc, sourceline, tag)
+        if self._substituting:  # (the path is joined only when a rule needs it: see _for_node)
+            path = prefix + name + (f"::{uid}" if name == type_id else "")
+            rule = self.factory.substitution_for(name, type_id, path)
+            if rule is not None:
+                builder = self.factory.substitution_builder(rule)
+        cfg = _node_config(record.blackboard, self._enums, manifest, uid, prefix, name, self._context,
+                           self.wake_up, self.timers, self._clock, doc, sourceline, tag)
         # Port passes only when there is something to do (most nodes have no port attributes).
         if attrs is not None:
             self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
-        elif manifest.ports:
-            defaults = self._port_table(manifest)[1]
-            if defaults:
-                self._fill_defaults(cfg, defaults, ())
+        elif defaults:
+            self._fill_defaults(cfg, defaults, ())
         if conditions:
             self._compile_conditions(cfg, conditions, doc, elem)
         try:
@@ -183,7 +188,7 @@ class TreeBuilder:
         except BehaviorTreeException as exc:  # keeps the class the constructor threw
             raise located(exc, str(exc), file=doc.file, line=doc.line_of(elem), element=elem.tag) from None
         except Exception as exc:
-            raise self._err(doc, elem, f"creating node '{path}' [{type_id}] failed: "
+            raise self._err(doc, elem, f"creating node '{cfg.path}' [{type_id}] failed: "
                                        f"{type(exc).__name__}: {exc}") from exc
         record.nodes.append(node)
         if child_plans:
@@ -192,6 +197,20 @@ class TreeBuilder:
             for child_plan in child_plans:
                 add_child(build_node(child_plan, doc, record, prefix, stack))
         return node
+
+    def _type(self, type_id: str, doc: XMLDocument, elem: etree._Element) -> tuple:
+        """(manifest, builder, port defaults of a node without port attributes) of a registered
+        node type, looked up once per type in a build."""
+        manifests = self.factory.manifests
+        manifest = manifests.get(type_id)
+        if manifest is None:
+            raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
+        if not type_id.isprintable() and _BAD_INSTANCE_CHAR.search(type_id) is not None:  # (the name)
+            bad = self._check_instance_name(type_id)
+            raise self._err(doc, elem, f"The instance name '{type_id!r}' contains the forbidden character {bad!r}")
+        defaults = self._port_table(manifest)[1] if manifest.ports else ()
+        known = self._types[type_id] = (manifest, self.factory.builders[type_id], defaults)
+        return known
 
     def _port_table(self, manifest: TreeNodeManifest) -> tuple[dict[str, tuple], tuple]:
         """What a node type's ports mean for the port pass, worked out once per type in a build:
@@ -379,8 +398,8 @@ class TreeBuilder:
                                        "to give each SubTree instance a unique name.")
         self._paths.add(path)
         factory = self.factory
-        cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, factory.context, self.wake_up,
-                           self.timers, self.clock_holder[0], doc, sourceline, "SubTree")
+        cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, None, factory.context,
+                           self.wake_up, self.timers, self.clock_holder[0], doc, sourceline, "SubTree")
         if conditions:
             self._compile_conditions(cfg, conditions, doc, elem)
         if self.factory.substitution_rules:
