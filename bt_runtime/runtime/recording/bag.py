@@ -79,6 +79,17 @@ class Rosbag2Bag:
         if t_ns > self._seg_end:
             self._seg_end = t_ns
 
+    def add(self, counts: dict[str, int], start_ns: int, end_ns: int) -> None:
+        """A batch of messages went into the open segment: ``counts`` per topic, log times
+        ``start_ns..end_ns`` (``count`` for a batch)."""
+        seg = self._seg_counts
+        for topic, k in counts.items():
+            seg[topic] = seg.get(topic, 0) + k
+        if start_ns < self._seg_start:
+            self._seg_start = start_ns
+        if end_ns > self._seg_end:
+            self._seg_end = end_ns
+
     def flush(self) -> None:
         """Close the open segment and list it in metadata.yaml."""
         if self.close_segment():

@@ -7,7 +7,7 @@ rosbags messages serialized once by ``types`` for the others) and logs the same 
 topic's channel of each sink: the bag (every message, into its open segment) and the live
 server (its own channels: only topics a client subscribed to, and the high-rate streams at
 ``live_rate_hz``, a viewing rate); every ``flush_interval_s`` wall seconds it closes the bag's
-segment. It works in slices of at
+segment. A bag alone is written by ``bag_writer.py`` (one function per stream, counted per batch). It works in slices of at
 most ``slice_s`` (0.5 ms) and then releases the GIL; in real time it also keeps out of the
 millisecond before each tick deadline (``tick_guard``), so the tick finds the GIL free. It runs
 at the loop's own OS priority (``writer_nice``): a lower one let the OS deschedule it while it
@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import structlog
 
+from .bag_writer import BagWriter
 from .convert import CONVERTERS, ConvertState
 from .types import serialize
 
@@ -101,6 +102,9 @@ class RecordPipeline:
         self._next_flush = 0.0
         self._flush_step_s = 0.002  # the room a step of a segment close is given between ticks (real time)
         self.max_flush_step_s = 0.0  # the longest step seen (wall): what a tick could have waited without the guard
+        # a bag alone: written by one function per stream (bag_writer.py), not item by item through _write_one
+        self._bag_writer = BagWriter(bag, self.state, self._add_channel, self.written) \
+            if bag is not None and live is None else None
 
     # -- the loop's side ---------------------------------------------------------------------------
     def put(self, kind: str, topic: str, t: float, payload: Any) -> None:
@@ -166,9 +170,12 @@ class RecordPipeline:
         queue = self.queue
         if len(queue) > self.max_queued:
             self.max_queued = len(queue)
-        write = self._write_one
-        while queue:
-            write(*queue.popleft())
+        if self._bag_writer is not None:
+            self._write_bag(queue)
+        else:
+            write = self._write_one
+            while queue:
+                write(*queue.popleft())
         if self.live is not None:
             self.flush_live()
         self._flush_when_due()
@@ -235,8 +242,11 @@ class RecordPipeline:
                         time.sleep(to_next + 0.0015)  # past the deadline and the tick itself
                         continue
                 end = clock() + slice_s
-                while queue and clock() < end:
-                    self._write_one(*queue.popleft())
+                if self._bag_writer is not None:
+                    self._write_bag(queue, end, clock)
+                else:
+                    while queue and clock() < end:
+                        self._write_one(*queue.popleft())
                 if self._outbox:
                     self.flush_live()
                 time.sleep(0)  # hand the GIL to the event loop if it is waiting
@@ -247,6 +257,12 @@ class RecordPipeline:
                 return
             self._flush_when_due()
             self._stop.wait(0.02)
+
+    def _write_bag(self, queue: deque, deadline: float = 0.0, clock: Any = None) -> None:
+        writer = self._bag_writer
+        before = writer.errors
+        writer.write(queue, deadline, clock)
+        self.errors += writer.errors - before
 
     def _write_one(self, kind: str, topic: str, t: float, payload: Any, held: bool = False) -> None:
         """Convert one queued item and log its outputs to the bag and (when due) the live view.
