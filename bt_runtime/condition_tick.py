@@ -9,7 +9,9 @@ no loops, no absent scripts on the tick path. Other combinations take the genera
 The closures read the blackboard and identity from ``node.config`` when they run, so they
 depend only on the node's tick and scripts: while a tree is built (``shared_during_build``) the
 nodes with the same tick and the same conditions share one closure (a tree repeats a few
-condition combinations on many nodes; each closure is about fifteen objects).
+condition combinations on many nodes; each closure is about fifteen objects). The tree builder
+gives the elements with the same condition attributes the same ``SharedConditions``, so the
+closure is found by the attributes' text, without a key made from the scripts.
 """
 
 from __future__ import annotations
@@ -24,12 +26,23 @@ from .status import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS, NodeStatus
 Tick = Callable[[Any], NodeStatus]
 After = Callable[[Any, NodeStatus], None]
 
+_NONE: dict = {}  # (never changed)
+
 # (attribute, the status it gives, whether the script's value is negated), in BT.CPP's order
 _IDLE_CHECKS = (("_failureIf", FAILURE, False), ("_successIf", SUCCESS, False), ("_skipIf", SKIPPED, False),
                 ("_while", SKIPPED, True))
 
 
-# (tick, after, pre items, post items) -> closure, while the tree builder builds a tree (None
+class SharedConditions(dict):
+    """The pre- or post-condition scripts (attribute -> Script) the tree builder gives every
+    node of a build whose element has the same condition attributes, ``key`` those attributes
+    ((name, text), ... in BT.CPP's order). Read-only: ``NodeConfig.pre_conditions`` and
+    ``post_conditions`` hand a node its own copy before anyone may change it."""
+
+    __slots__ = ("key",)
+
+
+# (tick, after, pre items, post items) or (tick, after, attributes) -> closure, while the tree builder builds a tree (None
 # otherwise: nothing outlives a build, so a closure never keeps a node or a script alive)
 _build_memo: dict[tuple, Tick] | None = None
 
@@ -56,11 +69,15 @@ def conditions_tick(tick: Tick, cfg: Any, after: After | None) -> Tick:
 
     The scripts are taken from the config now; code that changes a node's conditions later
     calls ``refresh_conditions()``, as it must for the fast paths too."""
-    pre = cfg._pre or {}
-    post = cfg._post or {}
+    pre = cfg._pre or _NONE
+    post = cfg._post or _NONE
     memo = _build_memo
     if memo is not None:
-        key = (tick, after, tuple(pre.items()), tuple(post.items()))
+        given = pre or post
+        if type(given) is SharedConditions and (post is _NONE or type(post) is SharedConditions):
+            key = (tick, after, given.key)  # (both from the same element's attributes)
+        else:
+            key = (tick, after, tuple(pre.items()), tuple(post.items()))
         shared = memo.get(key)
         if shared is not None:
             return shared

@@ -25,6 +25,7 @@ from types import MappingProxyType, MethodType
 from typing import Any, ClassVar
 
 from .blackboard import Blackboard
+from .condition_tick import SharedConditions
 from .condition_tick import conditions_tick as _conditions_tick
 from .errors import BehaviorTreeException, BTRuntimeError, LogicError, NodeExecutionError
 from .ports import EMPTY, PortInfo, blackboard_key, ports_dict
@@ -156,9 +157,10 @@ class NodeConfig:
 
     @property
     def pre_conditions(self) -> dict[str, Any]:
-        if self._pre is None:
-            self._pre = {}
-        return self._pre
+        pre = self._pre
+        if pre is None or type(pre) is SharedConditions:  # (the builder's, shared: a copy of our own)
+            pre = self._pre = dict(pre or ())
+        return pre
 
     @pre_conditions.setter
     def pre_conditions(self, value: dict[str, Any]) -> None:
@@ -166,9 +168,10 @@ class NodeConfig:
 
     @property
     def post_conditions(self) -> dict[str, Any]:
-        if self._post is None:
-            self._post = {}
-        return self._post
+        post = self._post
+        if post is None or type(post) is SharedConditions:
+            post = self._post = dict(post or ())
+        return post
 
     @post_conditions.setter
     def post_conditions(self, value: dict[str, Any]) -> None:

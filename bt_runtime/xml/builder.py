@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 from lxml import etree
 
 from ..blackboard import Blackboard, Entry
-from ..condition_tick import shared_during_build
+from ..condition_tick import SharedConditions, shared_during_build
 from ..errors import BehaviorTreeException, XMLLoadError, XMLLogicError, located
 from ..node import NodeConfig, TreeNode, TreeNodeManifest
 from ..ports import (
@@ -97,6 +97,7 @@ class TreeBuilder:
         self._context = factory.context
         self._clock = time.monotonic  # (clock_holder[0] while building)
         self._substituting = bool(factory.substitution_rules)
+        self._condition_sets: dict[tuple, tuple] = {}  # see _compile_conditions
 
     def build(self, tree_id: str, blackboard: Blackboard | None = None) -> Tree:
         """Build the tree ``tree_id``, the cyclic collector paused and the tree's objects put
@@ -127,18 +128,25 @@ class TreeBuilder:
     def _err(self, doc: XMLDocument, elem: etree._Element, message: str) -> XMLLoadError:
         return XMLLoadError(message, file=doc.file, line=doc.line_of(elem), element=elem.tag)
 
-    @staticmethod
-    def _compile_conditions(cfg: NodeConfig, conditions: tuple[tuple[str, str], ...], doc: XMLDocument,
+    def _compile_conditions(self, cfg: NodeConfig, conditions: tuple[tuple[str, str], ...], doc: XMLDocument,
                             elem: etree._Element) -> None:
-        """Compile the element's pre/post-condition attributes (its plan lists them in BT.CPP's
-        order) into the config."""
-        for attr, text in conditions:
-            try:
-                script = compile_script(text)
-            except BehaviorTreeException as exc:  # BT.CPP: LogicError("Error in the script ...")
-                raise XMLLogicError(f"{attr}: {exc}", file=doc.file, line=doc.line_of(elem),
-                                    element=elem.tag) from None
-            (cfg.pre_conditions if attr in _PRE_CONDITION_SET else cfg.post_conditions)[attr] = script
+        """Give the config the element's pre/post-condition scripts (its plan lists them in
+        BT.CPP's order): compiled once per distinct attribute set in a build and shared by
+        its nodes (read-only; see condition_tick.SharedConditions)."""
+        shared = self._condition_sets.get(conditions)
+        if shared is None:
+            pre = SharedConditions()
+            post = SharedConditions()
+            pre.key = post.key = conditions
+            for attr, text in conditions:
+                try:
+                    script = compile_script(text)
+                except BehaviorTreeException as exc:  # BT.CPP: LogicError("Error in the script ...")
+                    raise XMLLogicError(f"{attr}: {exc}", file=doc.file, line=doc.line_of(elem),
+                                        element=elem.tag) from None
+                (pre if attr in _PRE_CONDITION_SET else post)[attr] = script
+            shared = self._condition_sets[conditions] = (pre or None, post or None)
+        cfg._pre, cfg._post = shared
 
     @staticmethod
     def _check_instance_name(name: str) -> str | None:

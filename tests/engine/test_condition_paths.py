@@ -142,3 +142,26 @@ def test_a_check_reading_one_variable_gives_what_the_full_tick_gives(attr, code,
         return seen
 
     assert outcome(False) == outcome(True)
+
+
+def test_a_node_given_other_conditions_does_not_change_its_twins() -> None:
+    """Elements with the same condition attributes share their compiled scripts while the
+    tree is built; a node whose conditions are changed afterwards gets its own, the others
+    keep theirs (and an error in a shared script still names the first element carrying it)."""
+    from bt_runtime.script import compile_script
+
+    twin = '_skipIf="skip" _onSuccess="n += 1"'
+    tree = _tree(f'<Sequence><AlwaysSuccess name="a" {twin}/><AlwaysSuccess name="b" {twin}/></Sequence>')
+    tree.root_blackboard.set("skip", True)
+    tree.root_blackboard.set("n", 0)
+    a, b = (n for n in tree.nodes() if n.name in ("a", "b"))
+    a.config.pre_conditions["_skipIf"] = compile_script("!skip")
+    a.refresh_conditions()
+    assert "_skipIf" in b.config.pre_conditions and b.config.pre_conditions["_skipIf"].text == "skip"
+    assert tree.tick_exactly_once() is NodeStatus.SUCCESS
+    assert tree.root_blackboard.get("n") == 1  # a ran, b was skipped
+    with pytest.raises(BehaviorTreeException, match="line 2") as raised:
+        BehaviorTreeFactory().create_tree_from_text(
+            '<root BTCPP_format="4"><BehaviorTree ID="M"><Sequence>\n<AlwaysSuccess _skipIf="a +"/>\n'
+            '<AlwaysSuccess _skipIf="a +"/></Sequence></BehaviorTree></root>')
+    assert "_skipIf" in str(raised.value)
