@@ -81,12 +81,12 @@ BUILTIN_NODES = {
     # actions and conditions
     "AlwaysSuccess": AlwaysSuccessNode,
     "AlwaysFailure": AlwaysFailureNode,
-    "Script": ScriptNode,
+    "Script": ScriptNode.builder(),
     "SetBlackboard": SetBlackboardNode,
     "Sleep": SleepNode,
     "UnsetBlackboard": UnsetBlackboardNode,
     "WasEntryUpdated": WasEntryUpdatedNode,
-    "ScriptCondition": ScriptConditionNode,
+    "ScriptCondition": ScriptConditionNode.builder(),
     # subtree
     "SubTree": SubTreeNode,
 }
@@ -94,7 +94,7 @@ BUILTIN_NODES = {
 
 _CLASS_OF = {"Fallback": SequentialNode, "AsyncFallback": SequentialNode, "Sequence": SequentialNode,
              "AsyncSequence": SequentialNode, "ReactiveSequence": ReactiveNode,
-             "ReactiveFallback": ReactiveNode}
+             "ReactiveFallback": ReactiveNode, "Script": ScriptNode, "ScriptCondition": ScriptConditionNode}
 
 
 _BUILTIN_MANIFESTS: dict[str, TreeNodeManifest] = {}

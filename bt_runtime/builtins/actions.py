@@ -10,7 +10,7 @@ from itertools import repeat
 from ..errors import BTRuntimeError, LogicError
 from ..node import ConditionNode, NodeConfig, SyncActionNode, TreeNode
 from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port, type_of_value
-from ..script import Script, compile_node_script
+from ..script import Script, ScriptError, compile_node_script, compile_script
 from ..status import FAILURE, SUCCESS, NodeStatus
 
 
@@ -110,6 +110,30 @@ class _ScriptHolder:
             return type(self).tick
         return self._script_tick(script)
 
+    @classmethod
+    def builder(cls) -> Callable[[str, NodeConfig], TreeNode]:
+        """What the factory registers: ``cls(name, config)``, for literal ``code`` (the usual
+        case) in one frame without the type call and ``__init__`` frames (once per node)."""
+        plain = cls in _PLAIN_INIT
+
+        def build(name: str, config: NodeConfig) -> TreeNode:
+            raw = config.input_ports.get("code")
+            # (a pointer is '{key}' or '='; '{' not in the text settles most without the call)
+            if plain and type(raw) is str and (("{" not in raw and raw != "=") or blackboard_key(raw, "code") is None):
+                try:
+                    script = compile_script(raw)  # compile_node_script(raw), inlined
+                except ScriptError as exc:
+                    raise BTRuntimeError(str(exc)) from None
+                node = _new_object(cls)
+                node._code_from_blackboard = False
+                node._script = script
+                node._code_text = raw
+                _tree_node_init(node, name, config)  # (which picks the script's own tick)
+                return node
+            return cls(name, config)
+        build.node_class = cls  # type: ignore[attr-defined]
+        return build
+
     _unbound_tick = _bare_tick
 
     def _load(self) -> None:
@@ -175,6 +199,10 @@ def _next_init(cls: type) -> object:
 # The script node classes whose super().__init__ is TreeNode.__init__ (checked, not assumed:
 # a base that gains a constructor is then called through super() again).
 _PLAIN_INIT = frozenset(cls for cls in (ScriptNode, ScriptConditionNode) if _next_init(cls) is TreeNode.__init__)
+
+
+_new_object = object.__new__
+_tree_node_init = TreeNode.__init__
 
 
 class SetBlackboardNode(SyncActionNode):

@@ -258,3 +258,33 @@ def test_a_one_statement_script_node_ticks_without_compiling_its_closure() -> No
     assert bb.get("n") == 2.0 and bb.get("k") == 2
     assert plus._compiled is None and above._compiled is None  # never needed
     assert int_counter._compiled is not None  # an int entry: the general rules ran
+
+
+@pytest.mark.parametrize("cls_name", ["ScriptNode", "ScriptConditionNode"])
+@pytest.mark.parametrize("code", ["x := x + 1", "x > 0", "x := 1; y := x", "{code}", "=", "a +"])
+@pytest.mark.parametrize("conditions", [False, True])
+def test_script_node_builders_make_what_the_constructor_makes(cls_name: str, code: str, conditions: bool) -> None:
+    """The builder the factory registers for Script/ScriptCondition makes the node the class
+    makes (literal code in one frame, anything else through the class), errors included."""
+    from bt_runtime.builtins import actions
+    from bt_runtime.node import NodeConfig
+
+    cls = getattr(actions, cls_name)
+
+    def config() -> NodeConfig:
+        cfg = NodeConfig(input_ports={"code": code})
+        if conditions:
+            cfg.pre_conditions["_skipIf"] = compile_script("x > 1")
+        return cfg
+
+    def state_or_error(make):
+        try:
+            node = make("n", config())
+        except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
+            return ("error", type(exc), str(exc))
+        assert type(node) is cls
+        return ({slot: getattr(node, slot, None) for slot in ("_code_text", "_script", "_code_from_blackboard")},
+                node._cell.fast.__name__ if hasattr(node._cell.fast, "__name__") else type(node._cell.fast),
+                node.config.pre_conditions.keys(), node.name)
+
+    assert state_or_error(cls.builder()) == state_or_error(cls)
