@@ -37,10 +37,11 @@ def shape_node_tick(shape: tuple, slow: NodeTick, text: str = "") -> NodeTick | 
     kind = shape[0]
     if kind == "sequence":
         return _statements(shape[1], text)
-    names = NAMES_IN_SHAPE.get(kind)
-    if names is None:
+    make = _ACTION_MAKERS.get(kind)  # (None for a comparison: a Script node has no one-call tick for it)
+    if make is None:
         return None
-    return _ACTION_MAKERS[kind](*shape[1 + names:], slow, *shape[1:1 + names])
+    names = NAMES_IN_SHAPE[kind]
+    return make(*shape[1 + names:], slow, *shape[1:1 + names])
 
 
 def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:

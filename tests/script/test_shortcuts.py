@@ -154,7 +154,7 @@ def test_script_nodes_tick_through_their_scripts_one_call_tick() -> None:
     assert bb.get("n") == 2.0
 
 
-NODE_CODES = [("Script", t) for t in STATEMENTS + ["x += 1; x := y", "x := 'a'; y := x; x := 2"]
+NODE_CODES = [("Script", t) for t in STATEMENTS + ["x += 1; x := y", "x := 'a'; y := x; x := 2", "x > 0", "y <= 2"]
               if not t.startswith("!")] + [
     ("ScriptCondition", t) for t in ("x > 0", "y < 2", "x >= -1", "@y <= 3", "x != 1", "y")]
 
