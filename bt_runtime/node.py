@@ -89,9 +89,9 @@ class NodeConfig:
         """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
         positional arguments (much cheaper than the keyword call, once per node).
 
-        A node type that declares no ports can never have port remappings: its
-        ``input_ports``/``output_ports`` are one shared, read-only empty mapping (two dicts
-        fewer per node; most nodes of a tree are of such types).
+        ``input_ports``/``output_ports`` start as one shared, read-only empty mapping; the
+        builder gives a node with ports read-only mappings shared by every node of the build
+        with the same type and attributes (two dicts fewer per node; see builder._ports).
 
         The source line is kept as the parser's raw ``sourceline`` with its document and tag,
         resolved to the line of the start tag only if someone asks (``source``): no per-node
@@ -103,11 +103,7 @@ class NodeConfig:
         self = _new_object(cls)
         self.blackboard = blackboard
         self.enums = enums
-        if manifest.ports:
-            self.input_ports = {}
-            self.output_ports = {}
-        else:
-            self.input_ports = self.output_ports = _NO_PORTS
+        self.input_ports = self.output_ports = _NO_PORTS
         self.manifest = manifest
         self.uid = uid
         self._path = path

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import re
 import time
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
 from lxml import etree
@@ -18,7 +20,7 @@ from lxml import etree
 from ..blackboard import Blackboard, Entry
 from ..condition_tick import SharedConditions, shared_during_build
 from ..errors import BehaviorTreeException, XMLLoadError, XMLLogicError, located
-from ..node import NodeConfig, TreeNode, TreeNodeManifest
+from ..node import _NO_PORTS, NodeConfig, TreeNode, TreeNodeManifest
 from ..ports import (
     ANYTYPE,
     DOUBLE,
@@ -74,6 +76,22 @@ def subtree_literal(text: str) -> Any:
     return text
 
 
+def _fill_defaults(inputs: dict[str, str], outputs: dict[str, str], defaults: tuple, given: Any) -> None:
+    for name, text, to_in, to_out in defaults:
+        if name in given:
+            continue
+        if to_in:
+            inputs[name] = text
+        if to_out:
+            outputs[name] = text
+
+
+def _shared(ports: dict[str, str]) -> Mapping[str, str]:
+    """A node's port mapping as shared between nodes: read-only (nothing changes a built
+    node's ports)."""
+    return MappingProxyType(ports) if ports else _NO_PORTS
+
+
 class TreeBuilder:
     """Builds one Tree from the factory's registry."""
 
@@ -92,6 +110,7 @@ class TreeBuilder:
         self._subtree_plans: dict[tuple[str, tuple], tuple] = {}  # see _subtree_plan
         self._port_tables: dict[TreeNodeManifest, tuple] = {}  # see _port_table
         self._types: dict[str, tuple] = {}  # see _type
+        self._port_sets: dict[int, tuple] = {}  # see _ports
         # what every node's config gets, read once per build
         self._enums = factory.enums
         self._context = factory.context
@@ -185,8 +204,8 @@ class TreeBuilder:
         # Port passes only when there is something to do (most nodes have no port attributes).
         if attrs is not None:
             self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
-        elif defaults:
-            self._fill_defaults(cfg, defaults, ())
+        elif defaults is not None:
+            cfg.input_ports, cfg.output_ports = defaults
         if conditions:
             self._compile_conditions(cfg, conditions, doc, elem)
         try:
@@ -207,8 +226,9 @@ class TreeBuilder:
         return node
 
     def _type(self, type_id: str, doc: XMLDocument, elem: etree._Element) -> tuple:
-        """(manifest, builder, port defaults of a node without port attributes) of a registered
-        node type, looked up once per type in a build."""
+        """(manifest, builder, (input ports, output ports) of a node without port attributes
+        or None when both are empty) of a registered node type, looked up once per type in a
+        build."""
         manifests = self.factory.manifests
         manifest = manifests.get(type_id)
         if manifest is None:
@@ -217,6 +237,13 @@ class TreeBuilder:
             bad = self._check_instance_name(type_id)
             raise self._err(doc, elem, f"The instance name '{type_id!r}' contains the forbidden character {bad!r}")
         defaults = self._port_table(manifest)[1] if manifest.ports else ()
+        if defaults:
+            inputs: dict[str, str] = {}
+            outputs: dict[str, str] = {}
+            _fill_defaults(inputs, outputs, defaults, ())
+            defaults = (_shared(inputs), _shared(outputs))
+        else:
+            defaults = None
         known = self._types[type_id] = (manifest, self.factory.builders[type_id], defaults)
         return known
 
@@ -245,14 +272,31 @@ class TreeBuilder:
 
     def _ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str], bb: Blackboard,
                doc: XMLDocument, elem: etree._Element) -> None:
-        """The port pass of one node: its port attributes into the config (an unknown port is
-        an error), defaults for the others, then blackboard entries for the remapped ports and
-        the conversion check of literal ones (after every attribute was accepted, as before)."""
+        """The port pass of one node. The first node with these attributes (``attrs`` is shared
+        by the plans of equal elements of a document) makes it in full (``_first_ports``); the
+        others get the same read-only port mappings and only the blackboard entries of their
+        remapped ports (their blackboard may differ)."""
+        known = self._port_sets.get(id(attrs))  # (plans keep every attrs alive during a build)
+        if known is None or known[0] is not manifest:
+            self._first_ports(cfg, manifest, attrs, bb, doc, elem)
+            return
+        _, cfg.input_ports, cfg.output_ports, other, remapped = known
+        if other:
+            cfg._other = dict(other)
+        for name, raw, port in remapped:
+            self._port_entry(name, raw, port, bb, doc, elem)
+
+    def _first_ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str],
+                     bb: Blackboard, doc: XMLDocument, elem: etree._Element) -> None:
+        """The port pass: port attributes into the config (an unknown port is an error),
+        defaults for the others, then blackboard entries for the remapped ports and the
+        conversion check of literal ones (after every attribute was accepted, as before).
+        Remembers the outcome for the next node with the same attributes (``_ports``)."""
         table = self._port_tables.get(manifest)
         entries, defaults = table if table is not None else self._port_table(manifest)
         pending = None  # the given ports that may need a blackboard entry or a literal check
-        inputs = cfg.input_ports
-        outputs = cfg.output_ports
+        inputs: dict[str, str] = {}
+        outputs: dict[str, str] = {}
         for attr, value in attrs.items():
             entry = entries.get(attr)
             if entry is None:
@@ -275,27 +319,21 @@ class TreeBuilder:
                     pending = []
                 pending.append((attr, value, entry))
         if defaults:
-            self._fill_defaults(cfg, defaults, [attr for attr in attrs if attr in entries])
-        if pending is None:
-            return
-        for name, raw, (_, _, port, check) in pending:
+            _fill_defaults(inputs, outputs, defaults, [attr for attr in attrs if attr in entries])
+        cfg.input_ports = inputs = _shared(inputs)
+        cfg.output_ports = outputs = _shared(outputs)
+        remapped = []
+        for name, raw, (_, _, port, check) in pending or ():
             if (len(raw) >= 3 and raw[0] == "{" and raw[-1] == "}") or raw == "=" or raw == "{=}":
                 self._port_entry(name, raw, port, bb, doc, elem)  # (a strict blackboard pointer)
+                remapped.append((name, raw, port))
             elif check:
                 checked = (id(port.type), raw)  # the manifests keep every port type alive
                 if checked not in self._literals_ok:
                     self._check_literal(name, raw, port, cfg.enums, doc, elem)
                     self._literals_ok.add(checked)
-
-    @staticmethod
-    def _fill_defaults(cfg: NodeConfig, defaults: tuple, given: Any) -> None:
-        for name, text, to_in, to_out in defaults:
-            if name in given:
-                continue
-            if to_in:
-                cfg.input_ports[name] = text
-            if to_out:
-                cfg.output_ports[name] = text
+        other = cfg._other
+        self._port_sets[id(attrs)] = (manifest, inputs, outputs, dict(other) if other else None, tuple(remapped))
 
     def _port_entry(self, name: str, raw: str, port: Any, bb: Blackboard, doc: XMLDocument,
                     elem: etree._Element) -> None:

@@ -124,6 +124,7 @@ class TreeRegistry:
         self._documents_opened = 0
         self._anonymous = 0
         self.include_search_paths: list[Path] = []  # folders <include> may reach besides the top file's
+        self._infos: dict[object, tuple] = {}  # see _check_node
 
     @property
     def factory(self) -> BehaviorTreeFactory | None:
@@ -207,11 +208,13 @@ class TreeRegistry:
         # Validate every tree before registering any, so a bad document changes nothing.
         shapes = []
         plans = []
+        self._infos = {}  # see _check_node (valid while the manifests do not change: one document)
         for bt in tree_elements:
             root_elem = element_children(bt)[0]
             shape = Shape(1, root_elem, [])
             plans.append(self._check_node(doc, root_elem, 1, None, shape))
             shapes.append(shape)
+        self._infos = {}
         for bt, tree_id, shape, plan in zip(tree_elements, ids, shapes, plans):
             definition = self.trees[tree_id] = TreeDefinition(tree_id, bt, doc, plan)
             definition._depth_shape = shape  # type: ignore[attr-defined]  # see depth.py
@@ -281,11 +284,13 @@ class TreeRegistry:
                     parent: etree._Element | None, shape: Shape) -> ElementPlan:
         """Check one element and its children; note in ``shape`` its SubTrees and the
         deepest other element (what the expanded-depth check needs, without a walk of its own).
-        Returns the element's plan, what the builder reads instead of the element."""
+        Returns the element's plan, what the builder reads instead of the element.
+
+        What an element's tag and attributes say (``_element_info``) is worked out once per
+        distinct (tag, attributes) in a document: trees repeat the same few elements."""
         if depth > MAX_DEPTH:
             raise self._err(doc, elem, f"Maximum XML nesting depth exceeded (limit: {MAX_DEPTH}). "
                                        "The XML is too deeply nested.")
-        manifests = self._manifests
         tag = elem.tag
         children = elem[:] if len(elem) else ()  # element_children(elem), inlined: most are leaves
         for child in children:  # (a loop in this frame: a comprehension costs a frame and a list)
@@ -293,6 +298,55 @@ class TreeRegistry:
                 children = [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
                 break
         items = elem.items()  # one lxml call for every attribute (elem.get costs as much)
+        key = (tag, *items) if items else tag
+        info = self._infos.get(key)
+        if info is None:
+            info = self._element_info(doc, elem, tag, items, key, children)
+        type_id, name, items, attrs, conditions, node_type, explicit = info
+        if node_type is None:  # a SubTree
+            if children:
+                raise self._err(doc, elem, f"<SubTree> with ID '{type_id}' should not have any child")
+            shape.subtrees.append((type_id, elem, depth))
+            return (tag, type_id, name, items, attrs, conditions, elem.sourceline, (), elem)
+        if depth >= shape.plain_depth:  # (the last deepest, as depth.py's own walk finds)
+            shape.plain_depth = depth
+            shape.plain_elem = elem
+        if explicit and parent is not None and parent.tag == "ReactiveSequence":
+            raise self._err(doc, elem, f"Unknown node type: {tag} (BehaviorTree.CPP rejects explicit "
+                                       "<Action ID=...> children of a ReactiveSequence; use the compact "
+                                       f"form <{type_id}/>)")
+        if node_type is _UNKNOWN:
+            manifests = self._manifests
+            raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
+        if node_type is _DECORATOR and len(children) != 1:
+            raise self._err(doc, elem, f"The node '{type_id}' must have exactly 1 child")
+        if children:
+            if node_type is _CONTROL:
+                if type_id == "TryCatch" and len(children) < 2:
+                    raise self._err(doc, elem, "The node 'TryCatch' must have at least 2 children")
+                if type_id == "ReactiveSequence":
+                    self._check_reactive_children(doc, elem, children)
+            elif node_type in _LEAF_TYPES:
+                raise self._err(doc, elem, f"The node '{type_id}' must not have any child")
+            plans = []
+            for child in children:
+                plans.append(self._check_node(doc, child, depth + 1, elem, shape))
+            plans = tuple(plans)
+        else:
+            if node_type is _CONTROL:
+                raise self._err(doc, elem, f"The node '{type_id}' must have 1 or more children")
+            plans = ()
+        return (tag, type_id, name, items, attrs, conditions, elem.sourceline, plans, elem)
+
+    def _element_info(self, doc: XMLDocument, elem: etree._Element, tag: str, items: list, key: object,
+                      children: object) -> tuple:
+        """What an element's tag and attributes say, checked (the errors name this element, the
+        first with them): (type ID (a SubTree's ID), name attribute or None, attribute items,
+        attributes as a dict or None when there are none (for a node other than a SubTree: none
+        but reserved ones), pre/post-condition attributes in BT.CPP's order, node type (None
+        for a SubTree, _UNKNOWN for an unregistered type), whether the tag is an explicit
+        Action/Condition/...). Plans with the same attributes share these objects (plans are
+        never mutated). The checks run in the order they always did (``children`` for the first)."""
         if items:
             items = tuple(items)
             attrs = dict(items)
@@ -300,7 +354,7 @@ class TreeRegistry:
             name = get("name")
             if _CONDITION_ATTRIBUTE_SET.isdisjoint(attrs):
                 conditions = ()
-            else:  # (the element's few attributes, not the eight names: a loop, not a generator)
+            else:  # (the element's few attributes, not the eight names)
                 conditions = []
                 for item in items:
                     if item[0] in _CONDITION_ATTRIBUTE_SET:
@@ -312,6 +366,7 @@ class TreeRegistry:
             items = conditions = ()
             attrs = name = None
             get = _no_attribute
+        manifests = self._manifests
         if tag == "SubTree":
             sub_id = get("ID")
             if children:
@@ -321,49 +376,24 @@ class TreeRegistry:
             if sub_id in manifests:
                 raise self._err(doc, elem, "The attribute [ID] of tag <SubTree> must not use the name of "
                                            "a registered Node")
-            shape.subtrees.append((sub_id, elem, depth))
-            return (tag, sub_id, name, items, attrs, conditions, elem.sourceline, (), elem)
-        if depth >= shape.plain_depth:  # (the last deepest, as depth.py's own walk finds)
-            shape.plain_depth = depth
-            shape.plain_elem = elem
-        explicit = tag in EXPLICIT_TAG_SET
-        if explicit:
-            type_id = get("ID")
-            if type_id is None:
-                raise self._err(doc, elem, f"The tag <{tag}> must have the attribute [ID]")
+            info = (sub_id, name, items, attrs, conditions, None, False)
         else:
-            type_id = tag
-            if attrs is not None and "ID" in attrs:
-                raise self._err(doc, elem, f"Attribute [ID] is not allowed in <{tag}>")
-        if explicit and parent is not None and parent.tag == "ReactiveSequence":
-            raise self._err(doc, elem, f"Unknown node type: {tag} (BehaviorTree.CPP rejects explicit "
-                                       "<Action ID=...> children of a ReactiveSequence; use the compact "
-                                       f"form <{type_id}/>)")
-        manifest = manifests.get(type_id)
-        if manifest is None:
-            raise self._err(doc, elem, f"Node not recognized: {type_id}{suggest(type_id, list(manifests))}")
-        node_type = manifest.node_type
-        if node_type is _DECORATOR and len(children) != 1:
-            raise self._err(doc, elem, f"The node '{type_id}' must have exactly 1 child")
-        if node_type is _CONTROL:
-            if not children:
-                raise self._err(doc, elem, f"The node '{type_id}' must have 1 or more children")
-            if type_id == "TryCatch" and len(children) < 2:
-                raise self._err(doc, elem, "The node 'TryCatch' must have at least 2 children")
-            if type_id == "ReactiveSequence":
-                self._check_reactive_children(doc, elem, children)
-        if children and node_type in _LEAF_TYPES:
-            raise self._err(doc, elem, f"The node '{type_id}' must not have any child")
-        if children:
-            plans = []
-            for child in children:
-                plans.append(self._check_node(doc, child, depth + 1, elem, shape))
-            plans = tuple(plans)
-        else:
-            plans = ()
-        if attrs is not None and RESERVED_ATTRIBUTES.issuperset(attrs):
-            attrs = None  # only a name, conditions...: the builder has no port pass to make
-        return (tag, type_id, name, items, attrs, conditions, elem.sourceline, plans, elem)
+            explicit = tag in EXPLICIT_TAG_SET
+            if explicit:
+                type_id = get("ID")
+                if type_id is None:
+                    raise self._err(doc, elem, f"The tag <{tag}> must have the attribute [ID]")
+            else:
+                type_id = tag
+                if attrs is not None and "ID" in attrs:
+                    raise self._err(doc, elem, f"Attribute [ID] is not allowed in <{tag}>")
+            manifest = manifests.get(type_id)
+            if attrs is not None and RESERVED_ATTRIBUTES.issuperset(attrs):
+                attrs = None  # only a name, conditions...: the builder has no port pass to make
+            info = (type_id, name, items, attrs, conditions, manifest.node_type if manifest else _UNKNOWN,
+                    explicit)
+        self._infos[key] = info
+        return info
 
     def _check_reactive_children(self, doc: XMLDocument, elem: etree._Element,
                                  children: list[etree._Element]) -> None:
@@ -381,6 +411,7 @@ class TreeRegistry:
 
 
 _DECORATOR, _CONTROL = NodeType.DECORATOR, NodeType.CONTROL
+_UNKNOWN = object()  # the node type of an element whose type is not registered (_element_info)
 
 
 def _no_attribute(name: str) -> None:
