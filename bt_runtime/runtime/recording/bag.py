@@ -48,6 +48,7 @@ class Rosbag2Bag:
         self._seg_counts: dict[str, int] = {}
         self._seg_start = 0
         self._seg_end = 0
+        self._rendered: dict[tuple[str, Any], str] = {}  # metadata.yaml entries, rendered once (metadata_yaml)
 
     @property
     def idle(self) -> bool:
@@ -120,39 +121,71 @@ class Rosbag2Bag:
     def close(self) -> None:
         if self.closed:
             return
-        self.flush()
+        self.close_segment()
         self.closed = True
-        self.write_metadata()
+        self.write_metadata()  # once: the close's flush wrote it too, for the same content
 
     def message_counts(self) -> dict[str, int]:
         return dict(self.counts)
 
-    def metadata(self) -> dict[str, Any]:
+    def topic_metadata(self, topic: str) -> dict[str, Any]:
+        typename = self.channels.types[topic]
+        return {"name": topic, "type": typename, "serialization_format": "cdr",
+                "offered_qos_profiles": offered_qos(topic in self.channels.latched),
+                "type_description_hash": type_hash(typename)}
+
+    def metadata(self, *, lists: bool = True) -> dict[str, Any]:
+        """metadata.yaml's content; ``lists=False``: the lists that grow with the bag (topics,
+        files) left empty (``metadata_yaml`` renders their entries once each)."""
         start = self.start_ns or 0
-        types = self.channels.types
-        latched = self.channels.latched
         info = {
             "version": 9,
             "storage_identifier": "mcap",
             "duration": {"nanoseconds": max(0, self.end_ns - start)},
             "starting_time": {"nanoseconds_since_epoch": start},
             "message_count": sum(self.counts.values()),
-            "topics_with_message_count": [
-                {"topic_metadata": {"name": topic, "type": types[topic], "serialization_format": "cdr",
-                                    "offered_qos_profiles": offered_qos(topic in latched),
-                                    "type_description_hash": type_hash(types[topic])},
-                 "message_count": n}
-                for topic, n in self.counts.items()],
+            "topics_with_message_count": [{"topic_metadata": self.topic_metadata(topic), "message_count": n}
+                                          for topic, n in self.counts.items()] if lists else [],
             "compression_format": "",
             "compression_mode": "",
-            "relative_file_paths": [f["path"] for f in self.files],
-            "files": self.files,
+            "relative_file_paths": [f["path"] for f in self.files] if lists else [],
+            "files": self.files if lists else [],
             "custom_data": self.custom_data,
             "ros_distro": "jazzy",
         }
         return {"rosbag2_bagfile_information": info}
 
+    def metadata_yaml(self) -> str:
+        """``dump_yaml(self.metadata())``, the same text, with each topic's and each segment's
+        entry rendered once and kept: PyYAML's representer is Python even with libyaml's
+        emitter, ~2 ms for a bag's 17 topics, and a segment close in real time holds the GIL
+        while it runs (``tests/runtime/recording/test_bag_metadata.py`` compares the texts)."""
+        text = dump_yaml(self.metadata(lists=False))
+        rendered = self._rendered
+        topics = "".join(_entry(rendered, ("topic", topic), "topics_with_message_count",
+                                {"topic_metadata": self.topic_metadata(topic), "message_count": 0}) + f"{n}\n"
+                         for topic, n in self.counts.items())
+        paths = "".join(_entry(rendered, ("path", f["path"]), "relative_file_paths", f["path"]) for f in self.files)
+        files = "".join(_entry(rendered, ("file", i), "files", f) for i, f in enumerate(self.files))
+        for key, entries in (("topics_with_message_count", topics), ("relative_file_paths", paths),
+                             ("files", files)):
+            if entries:
+                text = text.replace(f"\n  {key}: []\n", f"\n  {key}:\n{entries}", 1)
+        return text
+
     def write_metadata(self) -> None:
         tmp = self.path / "metadata.yaml.tmp"
-        tmp.write_text(dump_yaml(self.metadata()), encoding="utf-8")
+        tmp.write_text(self.metadata_yaml(), encoding="utf-8")
         os.replace(tmp, self.path / "metadata.yaml")
+
+
+def _entry(rendered: dict[tuple[str, Any], str], key: tuple[str, Any], field: str, value: Any) -> str:
+    """The YAML lines of one entry of list ``field`` of the bag's information, as ``dump_yaml``
+    writes them there; a topic's entry ends before its count (``message_count: 0`` is its last line)."""
+    text = rendered.get(key)
+    if text is None:
+        text = dump_yaml({"rosbag2_bagfile_information": {field: [value]}}).split("\n", 2)[2]
+        if key[0] == "topic":
+            text = text.removesuffix("0\n")
+        rendered[key] = text
+    return text
