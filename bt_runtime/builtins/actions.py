@@ -166,7 +166,16 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
         return SUCCESS
 
     def _script_tick(self, script: Script) -> Callable[[TreeNode], NodeStatus]:
-        return script.action_tick()
+        return script._action_tick or script.action_tick()
+
+    def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        """``_ScriptHolder._bare_tick`` in one frame (once per node built)."""
+        script = self._script  # None while TreeNode.__init__ runs (before the script is compiled)
+        if script is None or self._code_from_blackboard:
+            return type(self).tick
+        return script._action_tick or script.action_tick()
+
+    _unbound_tick = _bare_tick
 
 
 class ScriptConditionNode(_ScriptHolder, ConditionNode):
@@ -187,7 +196,16 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
         return SUCCESS if self._script.run_bool(cfg.blackboard, cfg.enums) else FAILURE
 
     def _script_tick(self, script: Script) -> Callable[[TreeNode], NodeStatus]:
-        return script.condition_tick()
+        return script._condition_tick or script.condition_tick()
+
+    def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
+        """``_ScriptHolder._bare_tick`` in one frame (once per node built)."""
+        script = self._script
+        if script is None or self._code_from_blackboard:
+            return type(self).tick
+        return script._condition_tick or script.condition_tick()
+
+    _unbound_tick = _bare_tick
 
 
 def _next_init(cls: type) -> object:

@@ -441,27 +441,6 @@ def _new_template(key: str) -> _Template | None:
     return template
 
 
-def _template_of(text: str) -> tuple[_Template, list[str]] | None:
-    """The template of ``text`` and its variable names in order of appearance (what the
-    template's placeholders stand for); None when the text is not fit for a template or its
-    template does not parse (then the plain parse reports the error with the text's own
-    positions and names). The token kinds of the template are those of the text, so it parses
-    exactly when the text does, into the same tree with the names renamed."""
-    if _MARK in text:
-        return None
-    parts = _IDENTIFIER.split(text)  # [text, name, text, name, ..., text]: one pass
-    key = _MARK.join(parts[0::2])
-    template = _templates.get(key, EMPTY)
-    if template is EMPTY:
-        template = _new_template(key)
-    if template is None:
-        return None
-    found = parts[1::2]
-    if "true" in found or "false" in found:  # literals, not variables: no template
-        return None
-    return template, found
-
-
 # --- public object --------------------------------------------------------------------------
 
 def _run_action(fn: Fn, text: str, node: Any) -> Any:
@@ -538,20 +517,18 @@ class Script:
                 found_new = True
         return found_new
 
-    def _form_tick(self, make: Any) -> Any:
-        """The one-call tick ``make`` (a template's maker) makes for this script's names."""
-        _, first, second, _ = self._template.form
-        names = self._names
-        return make(names[first]) if second is None else make(names[first], names[second])
-
     def action_tick(self) -> Any:
         """``f(node) -> SUCCESS`` that runs the script on the node's blackboard, errors reported
         as ``run`` reports them: the whole tick of a Script node in one call (shared by every
         node with this text; node_ticks.py makes a one-frame one for the commonest statements)."""
         tick = self._action_tick
         if tick is None:
-            if self._compiled is None and self._template.make_action is not None:
-                tick = self._form_tick(self._template.make_action)
+            template = self._template
+            if self._compiled is None and template.make_action is not None:  # (its names fill the form)
+                _, first, second, _ = template.form
+                names = self._names
+                make = template.make_action
+                tick = make(names[first]) if second is None else make(names[first], names[second])
             else:
                 fn = self._fn
                 tick = script_node_tick(fn, partial(_run_action, fn, self.text), self.text)
@@ -565,8 +542,12 @@ class Script:
         tick of a ScriptCondition node in one call."""
         tick = self._condition_tick
         if tick is None:
-            if self._compiled is None and self._template.make_condition is not None:
-                tick = self._form_tick(self._template.make_condition)
+            template = self._template
+            if self._compiled is None and template.make_condition is not None:
+                _, first, second, _ = template.form
+                names = self._names
+                make = template.make_condition
+                tick = make(names[first]) if second is None else make(names[first], names[second])
             else:
                 fn = self._fn
                 tick = condition_node_tick(fn, partial(_run_condition, fn, self.text))
@@ -632,9 +613,23 @@ def compile_script(text: str) -> Script:
     Raises ``ScriptError`` ('Error in the script "<text>"\\n<parser message>').
     """
     try:
-        hit = _template_of(text)
-        if hit is not None:
-            template, names = hit
+        # The template of ``text`` and its variable names in order of appearance (what the
+        # template's placeholders stand for), if the text is fit for one and its template
+        # parses (else the plain parse reports the error with the text's own positions and
+        # names). The token kinds of the template are those of the text, so it parses exactly
+        # when the text does, into the same tree with the names renamed.
+        template = None
+        if _MARK not in text:
+            parts = _IDENTIFIER.split(text)  # [text, name, text, name, ..., text]: one pass
+            key = _MARK.join(parts[0::2])
+            template = _templates.get(key, EMPTY)
+            if template is EMPTY:
+                template = _new_template(key)
+            if template is not None:
+                names = parts[1::2]
+                if "true" in names or "false" in names:  # literals, not variables: no template
+                    template = None
+        if template is not None:
             if template.form is not None:  # made without its closure (see Script)
                 script = _new_object(Script)
                 script.text = text
