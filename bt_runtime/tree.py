@@ -36,7 +36,7 @@ class HaltError(BTRuntimeError):
         super().__init__(f"{len(errors)} node(s) failed to halt: {detail}")
 
 
-@dataclass
+@dataclass(slots=True)
 class SubtreeRecord:
     """One expanded BehaviorTree: its nodes (creation order), blackboard and instance path."""
 

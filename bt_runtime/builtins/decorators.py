@@ -372,12 +372,29 @@ class PreconditionNode(DecoratorNode):
 
 
 class SubTreeNode(DecoratorNode):
-    """The node standing for an expanded <SubTree>; its child is the subtree's root."""
+    """The node standing for an expanded <SubTree>; its child is the subtree's root, its
+    ``subtree_id`` the ID of the tree it expands."""
 
+    __slots__ = ("subtree_id",)
     _bare_tick_ok = True  # tick() resets a completed child itself
 
     node_type = NodeType.SUBTREE
-    subtree_id = ""
+
+    def __init__(self, name: str, config: NodeConfig | None = None, subtree_id: str = ""):
+        self.subtree_id = subtree_id
+        if self._linear_mro:  # super().__init__(...) without its cost (TreeNode._linear_mro)
+            DecoratorNode.__init__(self, name, config)
+        else:
+            super().__init__(name, config)
+
+    @staticmethod
+    def _built(name: str, config: NodeConfig, subtree_id: str) -> SubTreeNode:
+        """``SubTreeNode(name, config, subtree_id)`` without the type call and the first
+        ``__init__`` frame: what the tree builder calls, once per SubTree expanded."""
+        node = _new_node(SubTreeNode)
+        node.subtree_id = subtree_id
+        _decorator_init(node, name, config)
+        return node
 
     @classmethod
     def provided_ports(cls):
@@ -410,3 +427,7 @@ class SubTreeNode(DecoratorNode):
                 child.node.halt_node()
             child.status = IDLE
         return status
+
+
+_new_node = object.__new__
+_decorator_init = DecoratorNode.__init__

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from lxml import etree
 
 from ..blackboard import Blackboard, Entry
+from ..builtins.decorators import SubTreeNode
 from ..condition_tick import SharedConditions, shared_during_build
 from ..errors import BehaviorTreeException, XMLLoadError, XMLLogicError, located
 from ..node import _NO_PORTS, NodeConfig, TreeNode, TreeNodeManifest
@@ -29,7 +30,6 @@ from ..ports import (
     RESERVED_ATTRIBUTES,
     blackboard_key,
     is_allowed_port_name,
-    is_strict_blackboard_pointer,
     parse_bool,
     polymorphic,
 )
@@ -48,12 +48,14 @@ if TYPE_CHECKING:
 _PRE_CONDITION_SET = frozenset(PRE_CONDITIONS)
 _node_config = NodeConfig._for_node
 _subtree_blackboard = Blackboard._for_subtree
+_subtree_node = SubTreeNode._built
 _BAD_INSTANCE_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
 _INT_RE = re.compile(r"-?[0-9]+")
 _DOUBLE_RE = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 
 
 _port_name_verdicts: dict[str, bool] = {}
+_NOT_OTHER = frozenset(("ID", "name", *PRE_CONDITIONS, *POST_CONDITIONS))  # (see _subtree_plan)
 
 
 def _allowed_port_name(name: str) -> bool:
@@ -107,7 +109,7 @@ class TreeBuilder:
         # (port type, enums, text) literals already converted once in this build: the same
         # literal on many nodes is checked once (the conversion is a pure function of these)
         self._literals_ok: set[tuple[int, str]] = set()
-        self._subtree_plans: dict[tuple[str, tuple], tuple] = {}  # see _subtree_plan
+        self._subtree_plans: dict[int, tuple] = {}  # see _subtree_plan
         self._port_tables: dict[TreeNodeManifest, tuple] = {}  # see _port_table
         self._types: dict[str, tuple] = {}  # see _type
         self._port_sets: dict[int, tuple] = {}  # see _ports
@@ -383,19 +385,25 @@ class TreeBuilder:
         attributes) in a build (a subtree used in many places is mostly used the same way):
         (port remapping, _autoremap, blackboard remappings, literal entries, other attributes)."""
         remap: dict[str, str] = {}
+        other: dict[str, str] = {}  # the attributes that are neither ports nor ID, name, conditions
         autoremap = False
+        allowed = _port_name_verdicts.get
         for attr, value in attrs.items():
-            if value == "{=}":
-                value = "{" + attr + "}"
+            verdict = allowed(attr)
+            if verdict is None:
+                verdict = _allowed_port_name(attr)
+            if verdict:
+                remap[attr] = "{" + attr + "}" if value == "{=}" else value
+                continue
             if attr == "_autoremap":
+                text = "{" + attr + "}" if value == "{=}" else value
                 try:
-                    autoremap = parse_bool(value)
+                    autoremap = parse_bool(text)
                 except BehaviorTreeException:
-                    raise self._err(doc, elem, f"_autoremap must be true or false, got '{value}'") from None
+                    raise self._err(doc, elem, f"_autoremap must be true or false, got '{text}'") from None
+            elif attr in _NOT_OTHER:
                 continue
-            if not _allowed_port_name(attr):
-                continue
-            remap[attr] = value
+            other[attr] = value
         model = self.registry.subtree_models.get(sub_id)
         if model and not autoremap:
             for port_name, port in model.items():
@@ -406,10 +414,13 @@ class TreeBuilder:
                                                f"defining a mandatory port called [{port_name}], but you are "
                                                "not remapping it")
                 remap[port_name] = port.default_string()
+                other.pop(port_name, None)  # (a model port given under a name that is not a port's)
         remapped: list[tuple[str, str]] = []
         literals: list[tuple[str, Any, Any]] = []
         for internal, value in remap.items():
-            key = blackboard_key(value, internal) if is_strict_blackboard_pointer(value.strip(" ")) else None
+            stripped = value.strip(" ")  # (is_strict_blackboard_pointer of it, inlined)
+            key = (blackboard_key(value, internal) if len(stripped) >= 3 and stripped[0] == "{"
+                   and stripped[-1] == "}" else None)
             if key is not None:
                 remapped.append((internal, key))
             else:
@@ -419,10 +430,9 @@ class TreeBuilder:
                               DOUBLE if isinstance(literal, float) else
                               INT if -(2**31) <= literal < 2**31 else INT64)
                 literals.append((internal, literal, entry_type))
-        other = {k: v for k, v in attrs.items() if k not in remap and k not in ("ID", "name")
-                 and k not in PRE_CONDITIONS and k not in POST_CONDITIONS}
-        other.setdefault("_autoremap", "true" if autoremap else "false")
-        return remap, autoremap, tuple(remapped), tuple(literals), other
+        if "_autoremap" not in other:
+            other["_autoremap"] = "true" if autoremap else "false"
+        return _shared(remap), autoremap, tuple(remapped), tuple(literals), other
 
     def _build_subtree(self, plan: ElementPlan, doc: XMLDocument, record: SubtreeRecord, prefix: str,
                        stack: list[str]) -> TreeNode:
@@ -437,25 +447,29 @@ class TreeBuilder:
             raise self._err(doc, elem, f"Recursive behavior tree cycle detected: tree '{sub_id}' references "
                                        "itself (directly or indirectly)")
         manifest = self.factory.manifests["SubTree"]
-        uid = self._next_uid()
+        self._uid = uid = self._uid + 1  # _next_uid(), inlined
+        if uid > 0xFFFF:
+            raise XMLLoadError("Too many nodes: uids are 16-bit in BT.CPP (max 65535)")
         path = prefix + (name_attr if name_attr is not None else f"{sub_id}::{uid}")
-        if path in self._paths:
+        paths = self._paths
+        if path in paths:
             raise self._err(doc, elem, f"Duplicate SubTree path detected: '{path}'. Use the 'name' attribute "
                                        "to give each SubTree instance a unique name.")
-        self._paths.add(path)
-        factory = self.factory
-        cfg = _node_config(record.blackboard, factory.enums, manifest, uid, path, None, factory.context,
-                           self.wake_up, self.timers, self.clock_holder[0], doc, sourceline, "SubTree")
+        paths.add(path)
+        cfg = _node_config(record.blackboard, self._enums, manifest, uid, path, None, self._context,
+                           self.wake_up, self.timers, self._clock, doc, sourceline, "SubTree")
         if conditions:
             self._compile_conditions(cfg, conditions, doc, elem)
-        if self.factory.substitution_rules:
+        if self._substituting:
             rule = self.factory.substitution_for(name_attr or sub_id, "SubTree", path)
             if rule is not None:  # BT.CPP builds the substitute in its place and expands nothing
                 return self._build_substituted_subtree(rule, name_attr or sub_id, cfg, attrs, record, doc, elem)
 
-        plan = self._subtree_plans.get((sub_id, items))
+        # (items: one tuple per distinct element of a document, and it holds the ID; the plans
+        # keep it alive during the build, so its id is a key)
+        plan = self._subtree_plans.get(id(items))
         if plan is None:
-            plan = self._subtree_plans[(sub_id, items)] = self._subtree_plan(sub_id, attrs, doc, elem)
+            plan = self._subtree_plans[id(items)] = self._subtree_plan(sub_id, attrs, doc, elem)
         remap, autoremap, remapped, literals, other = plan
         child_bb = _subtree_blackboard(record.blackboard, dict(remapped), autoremap)
         if literals:
@@ -464,15 +478,14 @@ class TreeBuilder:
                 entry = Entry(entry_type)
                 entry.write(literal)
                 local[internal] = entry
-        cfg.input_ports = dict(remap)
+        cfg.input_ports = remap  # (read-only, shared by the SubTrees of this element)
         cfg.other_attributes = dict(other)
-        try:
-            node = self.factory.builders["SubTree"](name_attr or sub_id, cfg)
+        try:  # (the registered "SubTree" builder, which can be neither replaced nor removed)
+            node = _subtree_node(name_attr or sub_id, cfg, sub_id)
         except BehaviorTreeException as exc:
             raise self._err(doc, elem, str(exc)) from None
-        node.subtree_id = sub_id
         record.nodes.append(node)
-        sub_record = SubtreeRecord(sub_id, path, child_bb)
+        sub_record = SubtreeRecord(sub_id, path, child_bb, [])
         self._records.append(sub_record)
         root = self._build_node(definition.plan, definition.document, sub_record, path + "/",
                                 [*stack, sub_id])
