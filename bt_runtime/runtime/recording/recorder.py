@@ -33,12 +33,16 @@ log = structlog.get_logger("bt_runtime.recording")
 # driver stream -> (converter kind, TopicNames field)
 SENSOR_STREAMS = (("scan", "scan", "scan"), ("odom", "odom", "odom"), ("pose", "pose", "tf"),
                   ("imu", "imu", "imu"), ("battery", "battery", "battery"), ("plan", "plan", "plan"))
-# virtual time: robot seconds between drains of the queue, 1 s (~180 messages): the writer's CPU ~10 %
-# less than in drains of 0.25 s, each drain's set-up and cache misses spread over more messages. With
-# a live view too (it was 0.25 s): a drain is one burst to foxglove-sdk's sending thread, whose cost is
-# mostly per wake-up (~25 us) rather than per message (~1 us in a burst of 100), so its CPU halved; a
-# virtual run goes ~40 robot seconds a wall second, so a viewer still sees it move ~40 times a second
-DRAIN_PERIOD_S = 1.0
+# virtual time: robot seconds between drains of the queue. With a live view 1 s (~180 messages): the
+# writer's CPU ~10 % less than in drains of 0.25 s, each drain's set-up and cache misses spread over
+# more messages, and a drain is one burst to foxglove-sdk's sending thread, whose cost is mostly per
+# wake-up (~25 us) rather than per message (~1 us in a burst of 100), so its CPU halved; a virtual run
+# goes ~40 robot seconds a wall second, so a viewer still sees it move ~40 times a second. A bag
+# alone: 5 s (~900 items; its writer 25 -> 21 ms per 30 robot s against 1 s), or sooner when the
+# queue holds a quarter of ``queue_size`` (looked at every DRAIN_CHECK_S)
+LIVE_DRAIN_PERIOD_S = 1.0
+DRAIN_PERIOD_S = 5.0
+DRAIN_CHECK_S = 1.0
 GATE_SOURCE_TOPIC = {"tree": "tree"}  # gate sources whose command the gate holds (no stream of their own)
 
 
@@ -236,10 +240,22 @@ class Recorder:
 
     async def _drain(self) -> None:
         """Virtual time only (the pipeline has no thread): write what is queued every
-        ``DRAIN_PERIOD_S`` robot seconds; the loop's work takes no robot time there."""
+        ``LIVE_DRAIN_PERIOD_S`` robot seconds with a live view; a bag alone every ``DRAIN_PERIOD_S``,
+        or sooner when a quarter of the queue is used. The loop's work takes no robot time there."""
+        pipeline = self.pipeline
+        if getattr(pipeline, "live", None) is not None:
+            while True:
+                await asyncio.sleep(LIVE_DRAIN_PERIOD_S)
+                pipeline.drain()
+        queue, early = pipeline.queue, pipeline.queue_size // 4
+        checks = max(1, round(DRAIN_PERIOD_S / DRAIN_CHECK_S))
+        k = 0
         while True:
-            await asyncio.sleep(DRAIN_PERIOD_S)
-            self.pipeline.drain()
+            await asyncio.sleep(DRAIN_CHECK_S)
+            k += 1
+            if k >= checks or len(queue) >= early:
+                k = 0
+                pipeline.drain()
 
     def _diagnostics(self) -> None:
         topic = self.options.topics.diagnostics

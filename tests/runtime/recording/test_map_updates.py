@@ -81,3 +81,15 @@ def test_each_teleop_command_is_recorded_on_its_own_topic(tmp_path):
         got = [(m.linear.x, m.angular.z) for m in
                (reader.deserialize(raw, c.msgtype) for c, _t, raw in reader.messages(conns))]
     assert got == sent  # float64 on the wire: exact
+
+
+def test_a_small_queue_is_drained_before_it_fills(tmp_path):
+    """On virtual time a bag alone is drained every 5 robot s, or sooner when a quarter of the
+    queue is used: a queue of 400 (about 2 robot s of this run) drops nothing in 12 s."""
+    async def body(driver) -> None:
+        await asyncio.sleep(12.0)
+
+    report = _record(tmp_path / "bag", RecordingOptions(queue_size=400), body)
+    assert report["dropped"] == {}
+    assert 100 <= report["max_queued"] < 400
+    assert report["messages"]["/odom"] >= 12 * 45
