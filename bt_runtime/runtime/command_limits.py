@@ -54,6 +54,23 @@ class CommandLimiter:
         if twist.is_zero:
             return ZERO_TWIST
         lim = self.limits
+        v, w = self._speed(twist, speed_limit)
+        dt = max(0.0, dt)
+        if math.isfinite(lim.max_linear_accel):
+            v = _ramp(v, previous.linear, lim.max_linear_accel * dt)
+        if math.isfinite(lim.max_angular_accel):
+            w = _ramp(w, previous.angular, lim.max_angular_accel * dt)
+        return Twist(v, w)
+
+    def clamp(self, twist: Twist, speed_limit: tuple[float, float] | None = None) -> Twist:
+        """``twist`` within the speed limits only: where ``apply`` ends once no ramp is left
+        (``apply(t, clamp(t), dt)`` is ``clamp(t)`` for every ``dt``)."""
+        if twist.is_zero:
+            return ZERO_TWIST
+        return Twist(*self._speed(twist, speed_limit))
+
+    def _speed(self, twist: Twist, speed_limit: tuple[float, float] | None) -> tuple[float, float]:
+        lim = self.limits
         vmax, wmax = lim.max_linear, lim.max_angular
         if speed_limit is not None:
             vmax, wmax = min(vmax, speed_limit[0]), min(wmax, speed_limit[1])
@@ -63,9 +80,4 @@ class CommandLimiter:
             v, w = v * scale, w * scale
         if abs(w) > wmax:
             w = math.copysign(wmax, w)
-        dt = max(0.0, dt)
-        if math.isfinite(lim.max_linear_accel):
-            v = _ramp(v, previous.linear, lim.max_linear_accel * dt)
-        if math.isfinite(lim.max_angular_accel):
-            w = _ramp(w, previous.angular, lim.max_angular_accel * dt)
-        return Twist(v, w)
+        return v, w

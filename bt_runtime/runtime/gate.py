@@ -17,6 +17,14 @@ it fails with ``UnsafeCommandError``, or navigation is cancelled so the node wai
 fails), and finite ones are clamped to the robot's speed and acceleration limits and the
 current speed limit (``command_limits.py``). With a ``LoopWatchdog`` attached, sends are
 serialised with it and every heartbeat refreshes it (``watchdog.py``).
+
+The decision is computed again only when it can differ: every input change bumps ``_version``,
+and a decision is reused (``_reuse``) while the version and the zones' scan are the same, the
+heartbeat is fresh, no staleness or scan-age threshold lies between then and now (to within a
+microsecond: near one the whole decision runs), and the limiter's output is its own fixed
+point (a ramp in progress is recomputed). What goes out is the same command, sent, recorded
+and announced as the full path would; only the arithmetic is skipped. An idle tree's ticks (a
+held zero) take this path.
 """
 
 from __future__ import annotations
@@ -67,6 +75,13 @@ class GateSwitch:
     reason: str
 
 
+def _same(a: Twist, b: Twist) -> bool:
+    """Equal to the bit (a zero's sign included: it goes on the wire)."""
+    return (a.linear == b.linear and a.angular == b.angular
+            and math.copysign(1.0, a.linear) == math.copysign(1.0, b.linear)
+            and math.copysign(1.0, a.angular) == math.copysign(1.0, b.angular))
+
+
 class DecisionGate:
     """Multiplexes the tree's, navigation's and the extra inputs' commands (twist_mux rules, locks)
     into ``driver.send_velocity``, below the emergency stop and the dead-man."""
@@ -100,6 +115,9 @@ class DecisionGate:
         self.watchdog: LoopWatchdog | None = None
         self.mux = TwistMux(self.config.inputs, self.config.locks)
         self.zones: SafetyZones | None = None  # collision_monitor-style zones (safety_zones.py)
+        self._version = 0  # bumped by every change of an input of the decision (see _reuse)
+        self._reuse_key: tuple | None = None  # (version, zones, zones' scan generation) of last_output
+        self._reuse_until = -math.inf  # last_output holds until then, by the inputs' time thresholds
 
     # -- setup ---------------------------------------------------------------------------------
     def attach(self) -> None:
@@ -135,6 +153,7 @@ class DecisionGate:
                 twist = ZERO_TWIST
             now = self.clock()
             self.mux.set_command(name, Twist(float(twist.linear), float(twist.angular)), now)
+            self._version += 1
             if not self.config.passthrough:
                 self._apply(now)
 
@@ -146,6 +165,7 @@ class DecisionGate:
             locked = bool(getattr(value, "data", value))
             if self.mux.set_lock(name, locked, now):
                 (log.warning if locked else log.info)("gate_lock", lock=name, locked=locked, sim_time=round(now, 3))
+            self._version += 1  # (the stamp moves a lock's timeout even when its value stays)
             if not self.config.passthrough:
                 self._apply(now)
 
@@ -159,6 +179,7 @@ class DecisionGate:
         self._nav = twist
         now = self.clock()
         self._nav_stamp = now
+        self._version += 1
         # forward at once (a plain Nav2 setup does the same in pass-through mode); when the
         # navigation command is not the chosen source this republishes the current decision
         self._apply(now)
@@ -185,6 +206,7 @@ class DecisionGate:
         calling node fails)."""
         linear, angular = float(linear), float(angular)
         self._tree_stamp = self.clock()
+        self._version += 1
         if self._refuse_if_nonfinite(TREE, linear, angular):
             self._tree = ZERO_TWIST
             record = self.refused[TREE]
@@ -224,6 +246,7 @@ class DecisionGate:
 
     def clear_tree_command(self) -> None:
         self._tree = None
+        self._version += 1
 
     @property
     def tree_command_active(self) -> bool:
@@ -233,17 +256,20 @@ class DecisionGate:
         """Stop now (an explicit zero goes out at once) until every reason is released."""
         if reason not in self._estops:
             self._estops[reason] = self.clock()
+            self._version += 1
             log.warning("emergency_stop", reason=reason, sim_time=round(self.clock(), 3))
         self._apply(self.clock())
 
     def shutdown(self) -> None:
         """Final explicit zero when the runtime stops (not an emergency; logged at info)."""
         self._estops.setdefault("runtime stopped", self.clock())
+        self._version += 1
         log.info("gate_shutdown", sim_time=round(self.clock(), 3))
         self._apply(self.clock())
 
     def release(self, reason: str) -> None:
         if self._estops.pop(reason, None) is not None:
+            self._version += 1
             log.info("emergency_stop_released", reason=reason, sim_time=round(self.clock(), 3))
 
     def release_all(self) -> None:
@@ -266,6 +292,7 @@ class DecisionGate:
                      sim_time=round(self.clock(), 3))
         self._nav_allowed = allowed
         self._nav_block_reason = "" if allowed else reason
+        self._version += 1
 
     @property
     def navigation_allowed(self) -> bool:
@@ -283,6 +310,7 @@ class DecisionGate:
             self.speed_limit = (math.inf if linear is None else abs(linear),
                                 math.inf if angular is None else abs(angular))
             self.speed_limit_reason = reason
+        self._version += 1
         log.info("speed_limit", linear=linear, angular=angular, reason=reason, sim_time=round(self.clock(), 3))
         nav = getattr(self.driver, "navigation", None)
         setter = getattr(nav, "set_speed_limit", None)
@@ -363,18 +391,13 @@ class DecisionGate:
         return IDLE, ZERO_TWIST, "no fresh command"
 
     def _apply(self, now: float) -> None:
-        source, twist, reason = self.decide(now)
-        if not is_finite(twist):  # every input is checked already; this is the last line
-            self._refuse_if_nonfinite(source, twist.linear, twist.angular)
-            twist = ZERO_TWIST
-        zones = self.zones
-        if zones is not None and not self.config.passthrough:  # every source, before the final clamp
-            twist = zones.filter(twist, now, source)
-        twist = self.limiter.apply(twist, self.last_output, now - self._last_output_time, self.speed_limit)
-        if source != self.source:
-            self.switches.append(GateSwitch(now, source, self.source, reason))
-            log.info("gate_source", source=source, previous=self.source, reason=reason, sim_time=round(now, 3))
-            self.source = source
+        if self._reuse(now):
+            twist = self.last_output
+            zones = self.zones
+            if zones is not None and zones.enabled and not self.config.passthrough:
+                zones.evaluations += 1  # (counted as the full path counts it)
+        else:
+            twist = self._decide_output(now)
         watchdog = self.watchdog
         if watchdog is None:
             self.driver.send_velocity(twist.linear, twist.angular)
@@ -388,4 +411,60 @@ class DecisionGate:
         if self.backup is not None:
             self.backup.record("cmd_vel", twist, now)
         if self.on_output is not None:
-            self.on_output(now, twist, source)
+            self.on_output(now, twist, self.source)
+
+    def _reuse(self, now: float) -> bool:
+        """``last_output`` is what the full decision would give at ``now`` (see the module
+        docstring): same inputs, same scan, fresh heartbeat, no threshold passed since."""
+        zones = self.zones
+        return (now < self._reuse_until and now - self._heartbeat <= self.config.deadman_timeout
+                and self._reuse_key == (self._version, zones, None if zones is None else zones.generation))
+
+    def _decide_output(self, now: float) -> Twist:
+        """The full decision: source, zones, limits; logs a switch of source, and notes how long
+        the result may be reused."""
+        source, twist, reason = self.decide(now)
+        finite = is_finite(twist)
+        if not finite:  # every input is checked already; this is the last line
+            self._refuse_if_nonfinite(source, twist.linear, twist.angular)
+            twist = ZERO_TWIST
+        zones = self.zones
+        key = (self._version, zones, None if zones is None else zones.generation)
+        errors = 0 if zones is None else zones.errors
+        if zones is not None and not self.config.passthrough:  # every source, before the final clamp
+            twist = zones.filter(twist, now, source)
+        limited = self.limiter.apply(twist, self.last_output, now - self._last_output_time, self.speed_limit)
+        if source != self.source:
+            self.switches.append(GateSwitch(now, source, self.source, reason))
+            log.info("gate_source", source=source, previous=self.source, reason=reason, sim_time=round(now, 3))
+            self.source = source
+        # reusable: a decision that does not hang on the heartbeat's age, reached without a
+        # refusal or a zones error (those are logged and counted each time), at the limiter's
+        # fixed point (a ramp still moving depends on the time since the last output)
+        if (source != DEADMAN and finite and (zones is None or zones.errors == errors)
+                and _same(limited, self.limiter.clamp(twist, self.speed_limit))):
+            self._reuse_key = key
+            self._reuse_until = self._thresholds(now)
+        else:
+            self._reuse_key = None
+        return limited
+
+    def _thresholds(self, now: float) -> float:
+        """The first instant after ``now`` at which the decision can change by time alone (an
+        input or the tree's or navigation's command going stale, a lock timing out, the scan
+        getting too old), less a microsecond; thresholds passed within the last millisecond
+        count as ahead (equality at a threshold is decided by the full path)."""
+        cfg = self.config
+        times = [self._tree_stamp + cfg.tree_stale_timeout, self._nav_stamp + cfg.nav_stale_timeout]
+        mux = self.mux
+        for item in (*mux.inputs.values(), *mux.locks.values()):
+            times.append(item.expiry())
+        zones = self.zones
+        if zones is not None:
+            times.append(zones.valid_until())
+        until = math.inf
+        recent = now - 1e-3
+        for t in times:
+            if recent < t < until:
+                until = t
+        return until - 1e-6

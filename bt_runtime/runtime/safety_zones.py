@@ -206,6 +206,8 @@ class SafetyZones:
         self.state: ZoneState = NO_ACTION
         self.scans = 0
         self.evaluations = 0
+        self.generation = 0  # bumped before a scan changes anything (the gate reuses decisions within one)
+        self.errors = 0  # filter() calls that failed (and stopped the robot)
         self._unsubscribe: Callable[[], None] | None = None
         self.on_change: Callable[[ZoneState], None] | None = None  # e.g. the ROS 2 driver's state topic
 
@@ -233,6 +235,7 @@ class SafetyZones:
             log.error("safety_zones_scan_dropped", error=repr(exc))
 
     def _take_scan(self, scan: LaserScan) -> None:
+        self.generation += 1
         r = np.asarray(scan.ranges, dtype=float)
         n = len(r)
         key = (scan.angle_min, scan.angle_increment, n)
@@ -263,6 +266,14 @@ class SafetyZones:
         scan = self._scan
         return scan is not None and now - scan.stamp <= self.source_timeout
 
+    def valid_until(self) -> float:
+        """When the current scan gets too old (inf: it never does, or there is none: the next
+        one comes with a new ``generation``)."""
+        scan = self._scan
+        if not self.use_scan or self.source_timeout == 0.0 or scan is None:
+            return math.inf
+        return scan.stamp + self.source_timeout
+
     def filter(self, twist: Twist, now: float, source: str = "") -> Twist:
         """The command the zones allow (``twist`` itself when none acts); records the state.
         An error inside stops the robot (logged) rather than the gate."""
@@ -271,6 +282,7 @@ class SafetyZones:
         try:
             return self._filter(twist, now, source)
         except Exception as exc:
+            self.errors += 1
             log.error("safety_zones_failed", error=repr(exc), sim_time=round(now, 3))
             return ZERO_TWIST
 
