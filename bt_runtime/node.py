@@ -303,6 +303,9 @@ class TreeNode:
     _pre_hook: PreTickHook | None = None
     _post_hook: PostTickHook | None = None
     _monitor: Callable[[TreeNode, NodeStatus, float], None] | None = None
+    # True while the node holds its execute_tick bound to itself in its __dict__ (a cycle that
+    # Tree.__del__ breaks; _select_execute_tick keeps it)
+    _bound_tick: bool = False
     # input port -> (blackboard key, port info, _unconverted_type), once read from the blackboard
     _input_pointers: dict[str, tuple[str, PortInfo | None, type]] | None = None
     # True when the class's MRO is a single-inheritance chain: then super().__init__ in any
@@ -443,15 +446,19 @@ class TreeNode:
         if self._pre_hook or self._post_hook or self._monitor:
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
             self._cell.fast = type(self)._execute_tick_full
+            self._bound_tick = True
         elif (cfg._pre or cfg._post) and (after := _after_full_tick(type(self))) is not False:
             fast = _conditions_tick(self._unbound_tick(), cfg, after)
             self.execute_tick = fast.__get__(self)  # type: ignore[method-assign]
             self._cell.fast = fast
+            self._bound_tick = True
         elif cfg._pre or cfg._post:  # a class with its own _execute_tick_full
             self.execute_tick = self._execute_tick_full  # type: ignore[method-assign]
             self._cell.fast = type(self)._execute_tick_full
+            self._bound_tick = True
         else:
             self.__dict__.pop("execute_tick", None)
+            self._bound_tick = False
             execute_tick = type(self).execute_tick
             bare = self._bare_tick_ok and execute_tick in _LIBRARY_EXECUTE_TICKS
             self._cell.fast = self._bare_tick() if bare else execute_tick

@@ -67,10 +67,9 @@ class Tree:
         (BT.CPP destroys a tree's nodes with the tree; a node kept past its tree is dead)."""
         for record in getattr(self, "subtrees", ()):
             for node in record.nodes:
-                cfg = node.config
                 # (only these nodes can hold a bound execute_tick: asking any other node for its
                 # __dict__ would create one, an allocation per node while the tree is freed)
-                if cfg._pre or cfg._post or node._pre_hook or node._post_hook or node._monitor:
+                if node._bound_tick:
                     node.__dict__.pop("execute_tick", None)
                 cell = node._cell
                 cell.node = None

@@ -129,3 +129,31 @@ def test_a_dropped_tree_and_its_forgotten_scripts_leave_no_cycles_behind() -> No
     finally:
         if was:
             gc.enable()
+
+
+def test_a_dropped_tree_with_hooked_nodes_leaves_no_cycles_behind() -> None:
+    """A pre/post-tick hook or a tick monitor binds the node's execute_tick to it (as a
+    pre/post condition does); a hook removed again unbinds it. Either way the tree is freed."""
+    factory = _factory()
+    warm = factory.create_tree("Main")  # warm every lazy cache
+    warm.root_blackboard.set("n", 0)
+    warm.tick_exactly_once()
+    del warm
+    gc.collect()
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        tree = factory.create_tree("Main")
+        tree.root_blackboard.set("n", 0)
+        nodes = [node for record in tree.subtrees for node in record.nodes]
+        nodes[1].set_pre_tick_function(lambda node: None)
+        nodes[2].set_post_tick_function(lambda node, status: None)
+        nodes[3].set_tick_monitor_callback(lambda node, status, us: None)
+        nodes[4].set_pre_tick_function(lambda node: None)
+        nodes[4].set_pre_tick_function(None)
+        assert tree.tick_exactly_once() is NodeStatus.SUCCESS
+        del tree, nodes
+        assert gc.collect() == 0
+    finally:
+        if was:
+            gc.enable()
