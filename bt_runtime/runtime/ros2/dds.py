@@ -55,6 +55,10 @@ try:  # what DataReader.take() calls, without its per-field deserialisation (cdr
     from cyclonedds._clayer import ddspy_take
 except ImportError:  # another binding version: fall back to DataReader.take()
     ddspy_take = None
+try:  # what DataWriter.write() calls with the serialised sample (write_cdr)
+    from cyclonedds._clayer import ddspy_write
+except ImportError:
+    ddspy_write = None
 
 log = structlog.get_logger("bt_runtime.ros2.dds")
 
@@ -113,6 +117,18 @@ def loopback_config(domain_id: int | None = None, lease_duration: float = 2.0) -
             "<MaxAutoParticipantIndex>40</MaxAutoParticipantIndex>"
             f"<LeaseDuration>{lease_duration:g} s</LeaseDuration>"
             "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>")
+
+
+def write_cdr(writer: Any, data: bytes) -> bool:
+    """Write an already serialised sample (encapsulation header included, length a multiple
+    of 4) as ``DataWriter.write`` does after serialising; False when ``writer`` is not a
+    Cyclone writer or the binding lacks ``ddspy_write`` (the caller then writes the object)."""
+    if ddspy_write is None or type(writer) is not DataWriter:
+        return False
+    ret = ddspy_write(writer._ref, data)
+    if ret < 0:
+        raise DDSException(ret, f"Occurred while writing sample in {writer!r}")
+    return True
 
 
 # ---------------------------------------------------------------------------------------------

@@ -30,6 +30,7 @@ import structlog
 from ..bringup import BringupError, BringupPlan, transition
 from ..messages import ComponentInfo, ComponentState, RobotInfo, Twist
 from . import dds, idl
+from .cmd_encoder import twist_encoder
 from .config import Qos, Ros2Config
 from .convert import Converter, Drop
 from .navigation import Ros2Navigation
@@ -77,6 +78,7 @@ class Ros2Driver:
         self._readers: dict[str, dds.Reader] = {}
         self._cmd_writer: Any = None
         self._cmd_type: type | None = None
+        self._cmd_encode = twist_encoder()  # (linear, angular) -> the command's CDR bytes (set at start)
         self._lifecycle: dict[str, tuple[dds.ServiceClient, dds.ServiceClient]] = {}  # by component
         self._nodes: dict[str, tuple[dds.ServiceClient, dds.ServiceClient]] = {}  # by lifecycle node
         self.lifecycle_states: dict[str, int] = {}
@@ -126,6 +128,7 @@ class Ros2Driver:
         cmd = t.cmd_vel
         self._cmd_type = idl.TwistStamped if cmd.stamped else idl.Twist
         self._cmd_writer = node.publisher(cmd.name, self._cmd_type, _qos(cmd.qos))
+        self._cmd_encode = twist_encoder(cmd.stamped, cmd.frame_id)
         for name, comp in cfg.components.items():
             if comp.lifecycle_node:
                 self._lifecycle[name] = self._node_clients(comp.lifecycle_node)
@@ -316,16 +319,19 @@ class Ros2Driver:
         ``zero_repeat_period`` stays off the wire (a standing base needs no 100 Hz stream of
         zeros; writing them was the largest single cost of an idle runtime's event loop), but
         is still announced on ``cmd_vel_out``: the command in force is zero either way."""
-        if linear == 0.0 and angular == 0.0:
-            written = self._zero_written_at
-            if written is not None and time.monotonic() - written < self.config.topics.cmd_vel.zero_repeat_period:
-                self.zeros_held += 1
-                for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
-                    callback(Twist(0.0, 0.0))
-                return
-        if self._write_cmd(linear, angular):
-            for callback in tuple(self._subscribers.get("cmd_vel_out", ())):
-                callback(Twist(float(linear), float(angular)))
+        written = self._zero_written_at
+        if (written is not None and linear == 0.0 and angular == 0.0
+                and time.monotonic() - written < self.config.topics.cmd_vel.zero_repeat_period):
+            self.zeros_held += 1
+            out = Twist(0.0, 0.0)
+        elif self._write_cmd(linear, angular):
+            out = Twist(float(linear), float(angular))
+        else:
+            return
+        callbacks = self._subscribers.get("cmd_vel_out")
+        if callbacks:
+            for callback in tuple(callbacks):
+                callback(out)
 
     def publish_diagnostics(self, diagnostics: list, now: float) -> None:
         """Component health (``runtime.diagnostics.ComponentDiagnostic``) on the diagnostics topic."""
@@ -367,13 +373,14 @@ class Ros2Driver:
         writer = self._cmd_writer
         if writer is None:
             return False
-        twist = idl.Twist(linear=idl.Vector3(float(linear), 0.0, 0.0), angular=idl.Vector3(0.0, 0.0, float(angular)))
-        try:
-            if self._cmd_type is idl.TwistStamped:
-                writer.write(idl.TwistStamped(header=idl.Header(stamp=idl.Time.now(),
-                                                                frame_id=self.config.topics.cmd_vel.frame_id),
-                                              twist=twist))
-            else:
+        try:  # the bytes packed at once (cmd_encoder.py); objects for a writer that is not Cyclone's
+            if not dds.write_cdr(writer, self._cmd_encode(float(linear), float(angular))):
+                twist = idl.Twist(linear=idl.Vector3(float(linear), 0.0, 0.0),
+                                  angular=idl.Vector3(0.0, 0.0, float(angular)))
+                if self._cmd_type is idl.TwistStamped:
+                    twist = idl.TwistStamped(header=idl.Header(stamp=idl.Time.now(),
+                                                               frame_id=self.config.topics.cmd_vel.frame_id),
+                                             twist=twist)
                 writer.write(twist)
             self.sent += 1
             self._zero_written_at = time.monotonic() if linear == 0.0 and angular == 0.0 else None
