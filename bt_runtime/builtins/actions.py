@@ -8,10 +8,10 @@ from functools import partial
 from itertools import repeat
 
 from ..errors import BTRuntimeError, LogicError
-from ..node import ConditionNode, NodeConfig, SyncActionNode, TreeNode
+from ..node import _LIBRARY_EXECUTE_TICKS, ConditionNode, NodeCell, NodeConfig, SyncActionNode, TreeNode
 from ..ports import ANY, ANYTYPE, EMPTY, STRING, bidirectional_port, blackboard_key, input_port, type_of_value
 from ..script import Script, ScriptError, compile_node_script, compile_script
-from ..status import FAILURE, SUCCESS, NodeStatus
+from ..status import FAILURE, IDLE, SUCCESS, NodeStatus
 
 
 class AlwaysSuccessNode(SyncActionNode):
@@ -115,6 +115,9 @@ class _ScriptHolder:
         """What the factory registers: ``cls(name, config)``, for literal ``code`` (the usual
         case) in one frame without the type call and ``__init__`` frames (once per node)."""
         plain = cls in _PLAIN_INIT
+        # the fast tick TreeNode.__init__ picks for a node of cls without conditions is _bare_tick()
+        assert cls._bare_tick_ok and cls.execute_tick in _LIBRARY_EXECUTE_TICKS, cls
+        script_tick = cls._tick_of  # Script.action_tick or .condition_tick
 
         def build(name: str, config: NodeConfig) -> TreeNode:
             raw = config.input_ports.get("code")
@@ -128,7 +131,19 @@ class _ScriptHolder:
                 node._code_from_blackboard = False
                 node._script = script
                 node._code_text = raw
-                _tree_node_init(node, name, config)  # (which picks the script's own tick)
+                if config._pre or config._post:
+                    _tree_node_init(node, name, config)  # (which picks the conditions' tick)
+                    return node
+                # TreeNode.__init__(node, name, config), inlined: the node's fast tick is its
+                # script's one-call tick (what _bare_tick gives; the class's execute_tick is the
+                # library's and the bare tick is allowed: checked below, once)
+                node.name = name
+                node.config = config
+                node._cell = cell = _new_cell()
+                cell.status = IDLE
+                cell.node = node
+                node._input_cache = None
+                cell.fast = script_tick(script)
                 return node
             return cls(name, config)
         build.node_class = cls  # type: ignore[attr-defined]
@@ -168,6 +183,8 @@ class ScriptNode(_ScriptHolder, SyncActionNode):
     def _script_tick(self, script: Script) -> Callable[[TreeNode], NodeStatus]:
         return script._action_tick or script.action_tick()
 
+    _tick_of = staticmethod(Script.action_tick)
+
     def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
         """``_ScriptHolder._bare_tick`` in one frame (once per node built)."""
         script = self._script  # None while TreeNode.__init__ runs (before the script is compiled)
@@ -198,6 +215,8 @@ class ScriptConditionNode(_ScriptHolder, ConditionNode):
     def _script_tick(self, script: Script) -> Callable[[TreeNode], NodeStatus]:
         return script._condition_tick or script.condition_tick()
 
+    _tick_of = staticmethod(Script.condition_tick)
+
     def _bare_tick(self) -> Callable[[TreeNode], NodeStatus]:
         """``_ScriptHolder._bare_tick`` in one frame (once per node built)."""
         script = self._script
@@ -220,6 +239,7 @@ _PLAIN_INIT = frozenset(cls for cls in (ScriptNode, ScriptConditionNode) if _nex
 
 
 _new_object = object.__new__
+_new_cell = NodeCell
 _tree_node_init = TreeNode.__init__
 
 

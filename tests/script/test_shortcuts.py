@@ -278,13 +278,24 @@ def test_script_node_builders_make_what_the_constructor_makes(cls_name: str, cod
         return cfg
 
     def state_or_error(make):
+        cfg = config()
         try:
-            node = make("n", config())
+            node = make("n", cfg)
         except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
             return ("error", type(exc), str(exc))
         assert type(node) is cls
-        return ({slot: getattr(node, slot, None) for slot in ("_code_text", "_script", "_code_from_blackboard")},
-                node._cell.fast.__name__ if hasattr(node._cell.fast, "__name__") else type(node._cell.fast),
-                node.config.pre_conditions.keys(), node.name)
+        state = {}  # every slot and instance attribute, the cell by its contents
+        for klass in cls.__mro__:
+            for slot in klass.__dict__.get("__slots__", ()):
+                if slot not in ("__dict__", "__weakref__") and hasattr(node, slot):
+                    state[slot] = getattr(node, slot)
+        cell = state.pop("_cell")
+        assert state.pop("config") is cfg
+        fast = cell.fast
+        state["cell"] = (type(cell), cell.status, cell.node is node,
+                         fast.__name__ if hasattr(fast, "__name__") else type(fast))
+        state["__dict__"] = sorted(node.__dict__)
+        state["pre"] = node.config.pre_conditions.keys()
+        return state
 
     assert state_or_error(cls.builder()) == state_or_error(cls)
