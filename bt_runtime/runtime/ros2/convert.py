@@ -47,7 +47,9 @@ def pose_msg(p: Pose2D) -> idl.Pose:
 
 
 def _finite(*values: float) -> bool:
-    return all(math.isfinite(v) for v in values)
+    # a finite sum has no inf or NaN in it (either would make the sum one); a sum that
+    # overflowed is checked value by value
+    return math.isfinite(sum(values)) or all(math.isfinite(v) for v in values)
 
 
 class Drop(Exception):  # noqa: N818 - a verdict, not an error

@@ -234,14 +234,18 @@ class Ros2Driver:
 
         robot_clock = self.robot_clock
 
+        received, header_stamps, latest, last_seen = self.received, self.header_stamps, self.latest, self.last_seen
+        to_loop = robot_clock.to_loop
+
         def on_samples(samples: list, now: float) -> None:
             for raw in samples:
-                self.received[stream] += 1
+                received[stream] += 1
                 header = getattr(raw, "header", None)
                 stamp = now
                 if header is not None:
-                    header_stamp = header.stamp.to_sec()
-                    stamp = robot_clock.to_loop(stream, header_stamp, now)
+                    time_ = header.stamp
+                    header_stamp = time_.sec + time_.nanosec * 1e-9  # (idl.Time.to_sec)
+                    stamp = to_loop(stream, header_stamp, now)
                 try:
                     msg = convert(raw, stamp)
                 except Drop as why:
@@ -251,11 +255,13 @@ class Ros2Driver:
                     self.count_drop(stream, repr(exc))
                     continue
                 if header is not None:
-                    self.header_stamps[stream] = header_stamp
-                self.latest[stream] = msg
-                self.last_seen[stream] = now
-                for callback in tuple(subscribers.get(stream, ())):
-                    callback(msg)
+                    header_stamps[stream] = header_stamp
+                latest[stream] = msg
+                last_seen[stream] = now
+                callbacks = subscribers.get(stream)
+                if callbacks:
+                    for callback in tuple(callbacks):
+                        callback(msg)
 
         return on_samples
 

@@ -137,3 +137,16 @@ def test_converter_limits():
     assert imu.yaw_rate == pytest.approx(0.3)
     contact = conv.bumper_vector(idl.Vector3Stamped(vector=idl.Vector3(0.0, 1.0, 0.2)), 0)
     assert contact.in_contact and contact.direction == pytest.approx(math.pi / 2)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_converter_names_non_finite_values_and_only_those(bad):
+    conv = Converter(Ros2Config())
+    with pytest.raises(Drop, match="non-finite imu"):
+        conv.imu(idl.Imu(orientation=idl.Quaternion(0, 0, 0, 1), angular_velocity=idl.Vector3(0, bad, 0.3)), 0)
+    # huge but finite values whose sum overflows are absurd, not non-finite
+    with pytest.raises(Drop, match="absurd imu"):
+        conv.imu(idl.Imu(orientation=idl.Quaternion(0, 0, 0, 1), angular_velocity=idl.Vector3(1e308, 1e308, 1e308)), 0)
+    with pytest.raises(Drop, match="non-finite odometry"):
+        conv.odom(idl.Odometry(pose=idl.PoseWithCovariance(pose=idl.Pose(
+            position=idl.Point(bad, 0.0, 0.0), orientation=idl.Quaternion(0, 0, 0, 1)))), 0)
