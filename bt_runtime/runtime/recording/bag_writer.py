@@ -74,23 +74,24 @@ class BagWriter:
             counter = self.counters[name] = [0]
         return loggers[name], counter
 
-    def write(self, queue: deque, deadline: float = 0.0, clock: Callable[[], float] | None = None) -> int:
+    def write(self, queue: deque, deadline: float = 0.0, clock: Callable[[], float] | None = None) -> None:
         """Write queued items, oldest first, until the queue is empty (or, with ``clock``, until
-        ``clock() >= deadline``). Returns the number of items taken."""
+        ``clock() >= deadline``)."""
         bag = self.bag
         if bag.idle:
             bag.open_segment()
         writers, make, pop = self.writers, self._make, queue.popleft
-        lo, hi, taken = 2**63 - 1, 0, 0
+        to_robot = self.state.robot if self.state.robot_time is not None else None
+        lo, hi = 2**63 - 1, 0
         while queue:
             kind, topic, t, payload = pop()
-            taken += 1
             try:
                 write = writers.get((kind, topic))
                 if write is None:
                     write = writers[(kind, topic)] = make(kind, topic)
-                t_ns = round(t * 1e9) if self.state.robot_time is None else round(self.state.robot(t) * 1e9)
-                t_ns = int(t_ns) if t_ns > 0 else 0
+                t_ns = int(round((t if to_robot is None else to_robot(t)) * 1e9))  # log time: robot time
+                if t_ns < 0:
+                    t_ns = 0
                 if write(t, t_ns, payload):
                     if t_ns < lo:
                         lo = t_ns
@@ -113,7 +114,6 @@ class BagWriter:
             written = self.written
             for name, k in counts.items():
                 written[name] = written.get(name, 0) + k
-        return taken
 
     def _make(self, kind: str, topic: str) -> Write:
         fused = FUSED.get(kind) if self.state.robot_time is None else None
@@ -141,7 +141,8 @@ def converted(state: ConvertState, kind: str, topic: str, output: Output) -> Wri
     return write
 
 
-# -- the high-rate kinds, fused (each the same bytes as its converter in convert.py) --------------
+# -- the high-rate kinds, fused (each the same bytes as its converter in convert.py; the fields go to
+# struct.pack as they are: its "d" converts with float() as the converters do) -----------------------
 
 def odom(state: ConvertState, topic: str, output: Output) -> Write:
     f = state.frames
@@ -158,9 +159,7 @@ def odom(state: ConvertState, topic: str, output: Output) -> Write:
         sec, ns = divmod(int(round(m.stamp * 1e9)), NS)
         half = yaw / 2.0
         s, c = sin(half), cos(half)
-        x, y = float(x), float(y)
-        odom_log(odom_enc(sec, ns, x, y, 0.0, 0.0, 0.0, s, c, float(tw.linear), 0.0, 0.0, 0.0, 0.0,
-                          float(tw.angular)), t_ns, None)
+        odom_log(odom_enc(sec, ns, x, y, 0.0, 0.0, 0.0, s, c, tw.linear, 0.0, 0.0, 0.0, 0.0, tw.angular), t_ns, None)
         tf_log(tf_enc(sec, ns, x, y, 0.0, 0.0, 0.0, s, c), t_ns, None)
         odom_n[0] += 1
         tf_n[0] += 1
@@ -190,7 +189,7 @@ def localized(state: ConvertState, topic: str, output: Output) -> Write:
         half = yaw / 2.0
         if not out:
             out.extend(output(topic, TF_T))
-        out[0](tf_enc(sec, ns, float(x), float(y), 0.0, 0.0, 0.0, sin(half), cos(half)), t_ns, None)
+        out[0](tf_enc(sec, ns, x, y, 0.0, 0.0, 0.0, sin(half), cos(half)), t_ns, None)
         out[1][0] += 1
         return True
 
@@ -205,8 +204,8 @@ def imu(state: ConvertState, topic: str, output: Output) -> Write:
     def write(t: float, t_ns: int, m: Any) -> bool:
         sec, ns = divmod(int(round(m.stamp * 1e9)), NS)
         half = m.yaw / 2.0
-        imu_log(enc(sec, ns, 0.0, 0.0, sin(half), cos(half), 0.0, 0.0, float(m.yaw_rate), float(m.accel_x),
-                    float(m.accel_y), 0.0), t_ns, None)
+        imu_log(enc(sec, ns, 0.0, 0.0, sin(half), cos(half), 0.0, 0.0, m.yaw_rate, m.accel_x, m.accel_y, 0.0),
+                t_ns, None)
         n[0] += 1
         return True
 
@@ -218,7 +217,7 @@ def command(state: ConvertState, topic: str, output: Output) -> Write:
     twist_log, n = output(topic, TWIST_T)
 
     def write(t: float, t_ns: int, m: Any) -> bool:
-        twist_log(enc(float(m.linear), 0.0, 0.0, 0.0, 0.0, float(m.angular)), t_ns, None)
+        twist_log(enc(m.linear, 0.0, 0.0, 0.0, 0.0, m.angular), t_ns, None)
         n[0] += 1
         return True
 
@@ -241,9 +240,8 @@ def odometry_like(state: ConvertState, topic: str, output: Output) -> Write:
         sec, ns = divmod(int(round(m.stamp * 1e9)), NS)
         half = p.yaw / 2.0
         s, c = sin(half), cos(half)
-        x, y = float(p.x), float(p.y)
-        odom_log(enc(sec, ns, x, y, 0.0, 0.0, 0.0, s, c, float(tw.linear), 0.0, 0.0, 0.0, 0.0,
-                     float(tw.angular)), t_ns, None)
+        x, y = p.x, p.y
+        odom_log(enc(sec, ns, x, y, 0.0, 0.0, 0.0, s, c, tw.linear, 0.0, 0.0, 0.0, 0.0, tw.angular), t_ns, None)
         odom_n[0] += 1
         if pose_topic:
             pose_log(pose_enc(sec, ns, x, y, 0.0, 0.0, 0.0, s, c), t_ns, None)
