@@ -14,6 +14,8 @@ and closes them, counts what went in, and writes ``metadata.yaml``.
 from __future__ import annotations
 
 import os
+import re
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -157,16 +159,30 @@ class Rosbag2Bag:
 
     def metadata_yaml(self) -> str:
         """``dump_yaml(self.metadata())``, the same text, with each topic's and each segment's
-        entry rendered once and kept: PyYAML's representer is Python even with libyaml's
-        emitter, ~2 ms for a bag's 17 topics, and a segment close in real time holds the GIL
+        entry rendered once and kept (the new ones of a call in one dump, each topic's QoS
+        profiles once per process): PyYAML's representer is Python even with libyaml's emitter,
+        ~2 ms for a bag's 17 topics in one piece, and a segment close in real time holds the GIL
         while it runs (``tests/runtime/recording/test_bag_metadata.py`` compares the texts)."""
         text = dump_yaml(self.metadata(lists=False))
         rendered = self._rendered
-        topics = "".join(_entry(rendered, ("topic", topic), "topics_with_message_count",
-                                {"topic_metadata": self.topic_metadata(topic), "message_count": 0}) + f"{n}\n"
-                         for topic, n in self.counts.items())
-        paths = "".join(_entry(rendered, ("path", f["path"]), "relative_file_paths", f["path"]) for f in self.files)
-        files = "".join(_entry(rendered, ("file", i), "files", f) for i, f in enumerate(self.files))
+        new = [t for t in self.counts if ("topic", t) not in rendered]
+        if new:
+            metadata = []
+            for topic in new:
+                entry = self.topic_metadata(topic)
+                entry["offered_qos_profiles"] = QOS_MARK
+                metadata.append({"topic_metadata": entry, "message_count": 0})
+            for topic, entry in zip(new, _render("topics_with_message_count", metadata), strict=True):
+                qos = _qos_yaml(topic in self.channels.latched)
+                rendered[("topic", topic)] = entry.replace(QOS_LINE, qos).removesuffix("0\n")  # up to its count
+        done = sum(1 for f in self.files if ("file", f["path"]) in rendered)
+        if done < len(self.files):  # segments are only appended
+            for f, path, entry in zip(self.files[done:], _render("relative_file_paths", [f["path"] for f in self.files[done:]]),
+                                      _render("files", self.files[done:]), strict=True):
+                rendered[("path", f["path"])], rendered[("file", f["path"])] = path, entry
+        topics = "".join(rendered[("topic", topic)] + f"{n}\n" for topic, n in self.counts.items())
+        paths = "".join(rendered[("path", f["path"])] for f in self.files)
+        files = "".join(rendered[("file", f["path"])] for f in self.files)
         for key, entries in (("topics_with_message_count", topics), ("relative_file_paths", paths),
                              ("files", files)):
             if entries:
@@ -179,13 +195,19 @@ class Rosbag2Bag:
         os.replace(tmp, self.path / "metadata.yaml")
 
 
-def _entry(rendered: dict[tuple[str, Any], str], key: tuple[str, Any], field: str, value: Any) -> str:
-    """The YAML lines of one entry of list ``field`` of the bag's information, as ``dump_yaml``
-    writes them there; a topic's entry ends before its count (``message_count: 0`` is its last line)."""
-    text = rendered.get(key)
-    if text is None:
-        text = dump_yaml({"rosbag2_bagfile_information": {field: [value]}}).split("\n", 2)[2]
-        if key[0] == "topic":
-            text = text.removesuffix("0\n")
-        rendered[key] = text
-    return text
+QOS_MARK = "offered-qos-profiles"  # where a topic's entry takes its QoS profiles, rendered once
+QOS_LINE = f"      offered_qos_profiles: {QOS_MARK}\n"
+
+
+def _render(field: str, values: list[Any]) -> list[str]:
+    """The YAML lines of each entry of list ``field`` of the bag's information, as ``dump_yaml``
+    writes them inside the whole (one dump for all of them)."""
+    body = dump_yaml({"rosbag2_bagfile_information": {field: values}}).split("\n", 2)[2]
+    return re.split(r"(?m)^(?=  - )", body)[1:]
+
+
+@cache
+def _qos_yaml(latched: bool) -> str:
+    """A topic entry's ``offered_qos_profiles`` lines."""
+    entry = _render("topics_with_message_count", [{"topic_metadata": {"offered_qos_profiles": offered_qos(latched)}}])[0]
+    return entry[entry.index("      offered_qos_profiles:"):]
