@@ -195,6 +195,24 @@ def _compare_one(op: str, lf: Fn, rf: Fn, right: Node, left: Node | None = None)
             return name_order_number
         if op in ("==", "!="):
             same, differ = (1.0, 0.0) if op == "==" else (0.0, 1.0)
+            if isinstance(left, Name):
+                key = left.name
+
+                def name_eq_number(bb, enums):
+                    # lf(bb, enums) inlined for a number in a local entry (the usual 'code == 3')
+                    entry = None if enums and key in enums else bb._resolved.get(key)
+                    if entry is not None:
+                        x = entry.value
+                        t = type(x)
+                        if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                            return same if abs(x - rv) <= FLT_EPSILON else differ
+                    x = lf(bb, enums)
+                    t = type(x)
+                    if t is float or (t is int and -MAX_EXACT <= x <= MAX_EXACT):
+                        return same if abs(x - rv) <= FLT_EPSILON else differ
+                    return 1.0 if compare(op, x, const, enums) else 0.0
+                name_eq_number.shape = ("equal", key, op == "==", rv)  # type: ignore[attr-defined]  # node_ticks
+                return name_eq_number
 
             def eq_number(bb, enums):
                 x = lf(bb, enums)

@@ -21,6 +21,7 @@ from typing import Any
 from ..errors import BTRuntimeError
 from ..status import FAILURE, SUCCESS, NodeStatus
 from .errors import CastError, ScriptRuntimeError
+from .values import FLT_EPSILON
 
 NodeTick = Callable[[Any], NodeStatus]
 
@@ -52,10 +53,11 @@ def condition_node_tick(fn: Any, slow: NodeTick) -> NodeTick | None:
 
 def shape_condition_tick(shape: tuple, slow: NodeTick) -> NodeTick | None:
     """``condition_node_tick`` for a compiled script of this ``shape``."""
-    if shape[0] != "order":
+    make = _CONDITION_MAKERS.get(shape[0])
+    if make is None:
         return None
-    _, key, fails, number = shape
-    return _order(fails, number, slow, key)
+    _, key, *rest = shape
+    return make(*rest, slow, key)
 
 
 def action_maker(kind: str, rest: tuple, slow: NodeTick) -> Callable[..., NodeTick] | None:
@@ -68,11 +70,12 @@ def action_maker(kind: str, rest: tuple, slow: NodeTick) -> Callable[..., NodeTi
 
 def condition_maker(kind: str, rest: tuple, slow: NodeTick) -> Callable[..., NodeTick] | None:
     """``action_maker`` for a ScriptCondition node."""
-    return partial(_order, *rest, slow) if kind == "order" else None
+    make = _CONDITION_MAKERS.get(kind)
+    return None if make is None else partial(make, *rest, slow)
 
 
 # The statement shapes with a one-call tick: how many variable names follow the kind.
-NAMES_IN_SHAPE = {"update": 1, "arith": 2, "constant": 1, "copy": 2, "order": 1}
+NAMES_IN_SHAPE = {"update": 1, "arith": 2, "constant": 1, "copy": 2, "order": 1, "equal": 1}
 
 
 def _order(fails: Callable[[float, float], bool], number: float, slow: NodeTick, key: str) -> NodeTick:
@@ -87,6 +90,34 @@ def _order(fails: Callable[[float, float], bool], number: float, slow: NodeTick,
                     return FAILURE if fails(x, number) else SUCCESS
         return slow(node)
     return order_tick
+
+
+def _equal(equal: bool, number: float, slow: NodeTick, key: str) -> NodeTick:
+    """``key == number`` (``equal``) or ``key != number``: equal within FLT_EPSILON, as BT.CPP."""
+    if equal:
+        def equal_tick(node, key=key, number=number, slow=slow):
+            cfg = node.config
+            entry = cfg.blackboard._resolved.get(key)
+            if entry is not None:
+                enums = cfg.enums
+                if not (enums and key in enums):
+                    x = entry.value
+                    if type(x) is float:
+                        return SUCCESS if abs(x - number) <= FLT_EPSILON else FAILURE
+            return slow(node)
+        return equal_tick
+
+    def not_equal_tick(node, key=key, number=number, slow=slow):
+        cfg = node.config
+        entry = cfg.blackboard._resolved.get(key)
+        if entry is not None:
+            enums = cfg.enums
+            if not (enums and key in enums):
+                x = entry.value
+                if type(x) is float:
+                    return FAILURE if abs(x - number) <= FLT_EPSILON else SUCCESS
+        return slow(node)
+    return not_equal_tick
 
 
 def _statements(fns: tuple, text: str) -> NodeTick:
@@ -241,3 +272,5 @@ def _copy(slow: NodeTick, key: str, source: str) -> NodeTick:
 # kind -> maker(*rest, slow, *names): the tick of a Script node holding a statement of that
 # shape (the makers take the variable names last, so a partial of the rest makes them in one call)
 _ACTION_MAKERS = {"update": _update, "arith": _arith, "constant": _constant, "copy": _copy}
+# kind -> maker(*rest, slow, key): the tick of a ScriptCondition node holding that comparison
+_CONDITION_MAKERS = {"order": _order, "equal": _equal}

@@ -156,7 +156,8 @@ def test_script_nodes_tick_through_their_scripts_one_call_tick() -> None:
 
 NODE_CODES = [("Script", t) for t in STATEMENTS + ["x += 1; x := y", "x := 'a'; y := x; x := 2", "x > 0", "y <= 2"]
               if not t.startswith("!")] + [
-    ("ScriptCondition", t) for t in ("x > 0", "y < 2", "x >= -1", "@y <= 3", "x != 1", "y")]
+    ("ScriptCondition", t) for t in ("x > 0", "y < 2", "x >= -1", "@y <= 3", "x != 1", "y", "x == 3", "y == 9",
+                                     "x != 4", "x == 0.5", "y == -7.5", "@x == 3")] + [("Script", "x == 3")]
 
 
 @pytest.mark.parametrize(("tag", "code"), NODE_CODES)
