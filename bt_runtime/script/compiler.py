@@ -28,7 +28,7 @@ from .node_ticks import (
 )
 from .operators import binary, compare, ieee_div, unary
 from .parser import Assign, Binary, Compare, Literal, Name, Node, ParseError, Ternary, Unary, parse
-from .shortcuts import shortcut_assign
+from .shortcuts import _Deferred, shortcut_assign, shortcut_maker
 from .values import FLT_EPSILON, MAX_EXACT, cast_double, normalize, to_bool
 
 Fn = Any  # Callable[[Blackboard, dict[str, int] | None], Any]
@@ -425,15 +425,27 @@ class _Template:
     node (node_ticks.action_maker: ``f(*names) -> tick``). With a form, a script of the
     template needs no closure to be ticked by a node (``Script.action_tick``); its closure is
     compiled on first need. ``form`` is (kind, index of the first name, index of the second
-    or None, the rest)."""
+    or None, the rest).
 
-    __slots__ = ("statements", "placeholders", "form", "make_action", "make_condition")
+    For a template of several statements, ``steps`` holds per statement the maker of its
+    shortcut closure (shortcuts.shortcut_maker: ``f(names, general)``), or None for a
+    statement that is compiled in full."""
+
+    __slots__ = ("statements", "placeholders", "form", "make_action", "make_condition", "steps")
 
     def __init__(self, statements: list[Node], placeholders: tuple[str, ...]):
         self.statements = statements
         self.placeholders = placeholders
-        self.form = self.make_action = self.make_condition = None
-        if len(statements) == 1:
+        self.form = self.make_action = self.make_condition = self.steps = None
+        if len(statements) > 1:
+            index = {p: i for i, p in enumerate(placeholders)}
+            steps = []
+            for statement in statements:
+                shape = getattr(_emit(statement, {}), "shape", None)
+                steps.append(shortcut_maker(shape, index) if shape is not None else None)
+            if any(steps):
+                self.steps = tuple(steps)
+        elif len(statements) == 1:
             shape = getattr(_emit(statements[0], {}), "shape", None)
             count = NAMES_IN_SHAPE.get(shape[0]) if shape is not None else None
             if count is not None:
@@ -657,8 +669,15 @@ def compile_script(text: str) -> Script:
                 return script
             statements = template.statements
             renaming = dict(zip(template.placeholders, names))
-            fn = (_emit(statements[0], renaming) if len(statements) == 1
-                  else _sequence([_emit(s, renaming) for s in statements]))
+            steps = template.steps
+            if steps is not None:  # (what _emit gives, without its decisions: see _Template)
+                fn = _sequence([_emit(s, renaming) if make is None else
+                                make(names, _Deferred(_general_assign, (s.op, renaming[s.target.name], s.value,
+                                                                        renaming)))
+                                for s, make in zip(statements, steps)])
+            else:
+                fn = (_emit(statements[0], renaming) if len(statements) == 1
+                      else _sequence([_emit(s, renaming) for s in statements]))
         else:
             fn = _sequence([compile_node(s) for s in parse(text)])
     except ParseError as exc:

@@ -188,3 +188,31 @@ def _assign_name_arith(key: str, source: str, arith, number: float, general: Fn)
     assign_arith.shape = ("arith", key, source, arith, number)  # type: ignore[attr-defined]
     return assign_arith
 
+
+
+def shortcut_maker(shape: tuple, index: dict[str, int]) -> Callable[[list[str], Fn], Fn] | None:
+    """``f(names, general)``: the closure ``shortcut_assign`` makes for a statement of this
+    ``shape`` (its own variables standing for placeholders, ``index`` their positions in
+    ``names``) with the variables ``names`` and the general closure ``general``; None when the
+    shape is not a shortcut's. Worked out once per template: a statement of a script of that
+    template is then made without the decisions ``shortcut_assign`` takes."""
+    kind = shape[0]
+    if kind == "update":
+        _, key, arith, number = shape
+        i, plus = index[key], arith is operator.add
+        return lambda names, general: _update_by_constant(names[i], arith, number, plus, general)
+    if kind == "constant":
+        _, key, _, constant = shape
+        i = index[key]
+        return lambda names, general: _assign_same_kind(names[i], constant, general)
+    if kind == "copy":
+        _, key, source = shape
+        i, j = index[key], index[source]
+        return lambda names, general: _copy(names[i], names[j], general)
+    if kind == "arith":
+        _, key, source, arith, number = shape
+        i, j = index[key], index[source]
+        if arith is operator.add:
+            return lambda names, general: _assign_name_plus(names[i], names[j], number, general)
+        return lambda names, general: _assign_name_arith(names[i], names[j], arith, number, general)
+    return None
