@@ -52,6 +52,18 @@ def _finite(*values: float) -> bool:
     return math.isfinite(sum(values)) or all(math.isfinite(v) for v in values)
 
 
+def imu_values_of(m: idl.Imu) -> tuple:
+    """What ``Converter.imu_values`` reads of an Imu."""
+    w, a, q = m.angular_velocity, m.linear_acceleration, m.orientation
+    return (w.x, w.y, w.z, a.x, a.y, a.z, q.x, q.y, q.z, q.w, m.orientation_covariance[0])
+
+
+def odom_values_of(m: idl.Odometry) -> tuple:
+    """What ``Converter.odom_values`` reads of an Odometry."""
+    p, q, t = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
+    return (p.x, p.y, q.x, q.y, q.z, q.w, t.linear.x, t.angular.z)
+
+
 class Drop(Exception):  # noqa: N818 - a verdict, not an error
     """A message that fails validation."""
 
@@ -87,29 +99,38 @@ class Converter:
                          float(m.range_max), ranges)
 
     def imu(self, m: idl.Imu, now: float) -> Imu:
+        return self.imu_values(imu_values_of(m), now)
+
+    def imu_values(self, values: tuple, now: float) -> Imu:
+        """``imu`` on the numbers it reads (``sensor_wire.py`` takes them from the bytes):
+        angular velocity, linear acceleration, orientation (x, y, z, w), orientation_covariance[0]."""
         v = self.v
-        w, a, q = m.angular_velocity, m.linear_acceleration, m.orientation
-        if not _finite(w.x, w.y, w.z, a.x, a.y, a.z, q.x, q.y, q.z, q.w):
+        wx, wy, wz, ax, ay, az, qx, qy, qz, qw, cov0 = values
+        if not _finite(wx, wy, wz, ax, ay, az, qx, qy, qz, qw):
             raise Drop("non-finite imu")
-        if abs(w.z) > v.max_yaw_rate or max(abs(a.x), abs(a.y), abs(a.z)) > v.max_accel:
+        if abs(wz) > v.max_yaw_rate or max(abs(ax), abs(ay), abs(az)) > v.max_accel:
             raise Drop("absurd imu")
-        norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
-        known = m.orientation_covariance[0] != -1.0 and norm > 0
+        norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+        known = cov0 != -1.0 and norm > 0
         if known and abs(norm - 1.0) > 0.1:
             raise Drop("orientation is not a unit quaternion")
-        return Imu(now, float(w.z), float(a.x), float(a.y), yaw_of(q) if known else 0.0)
+        return Imu(now, float(wz), float(ax), float(ay), yaw_from_quaternion(qx, qy, qz, qw) if known else 0.0)
 
     def odom(self, m: idl.Odometry, now: float) -> Odometry:
+        return self.odom_values(odom_values_of(m), now)
+
+    def odom_values(self, values: tuple, now: float) -> Odometry:
+        """``odom`` on the numbers it reads: position x, y, orientation (x, y, z, w), linear x,
+        angular z."""
         v = self.v
-        p, q, t = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
-        if not _finite(p.x, p.y, q.x, q.y, q.z, q.w, t.linear.x, t.angular.z):
+        px, py, qx, qy, qz, qw, vx, wz = values
+        if not _finite(px, py, qx, qy, qz, qw, vx, wz):
             raise Drop("non-finite odometry")
-        if max(abs(p.x), abs(p.y)) > v.max_position or abs(t.linear.x) > v.max_speed \
-                or abs(t.angular.z) > v.max_yaw_rate:
+        if max(abs(px), abs(py)) > v.max_position or abs(vx) > v.max_speed or abs(wz) > v.max_yaw_rate:
             raise Drop("absurd odometry")
-        if q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w < 1e-6:
+        if qx * qx + qy * qy + qz * qz + qw * qw < 1e-6:
             raise Drop("zero quaternion")
-        return Odometry(now, Pose2D(p.x, p.y, yaw_of(q)), Twist(float(t.linear.x), float(t.angular.z)))
+        return Odometry(now, Pose2D(px, py, yaw_from_quaternion(qx, qy, qz, qw)), Twist(float(vx), float(wz)))
 
     def pose(self, m: idl.PoseWithCovarianceStamped, now: float) -> LocalizedPose:
         p, q = m.pose.pose.position, m.pose.pose.orientation

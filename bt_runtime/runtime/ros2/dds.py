@@ -260,8 +260,9 @@ class DdsNode:
 
     def reader(self, dds_name: str, data_type: type, qos: QosProfile,
                on_samples: Callable[[list, float], None], *, user_data: str | None = None,
-               at_tick: bool = False) -> Reader:
-        reader = Reader(self, dds_name, data_type, qos, on_samples, user_data=user_data, at_tick=at_tick)
+               at_tick: bool = False, decode: Callable[[bytes], Any] | None = None) -> Reader:
+        reader = Reader(self, dds_name, data_type, qos, on_samples, user_data=user_data, at_tick=at_tick,
+                        decode=decode)
         self._readers.append(reader)
         if reader.polled:
             self._polled.append(reader)
@@ -276,8 +277,9 @@ class DdsNode:
 
     # -- ROS-level helpers ------------------------------------------------------------------------
     def subscription(self, name: str, data_type: type, qos: QosProfile,
-                     on_samples: Callable[[list, float], None], *, at_tick: bool = False) -> Reader:
-        return self.reader("rt" + self.fq(name), data_type, qos, on_samples, at_tick=at_tick)
+                     on_samples: Callable[[list, float], None], *, at_tick: bool = False,
+                     decode: Callable[[bytes], Any] | None = None) -> Reader:
+        return self.reader("rt" + self.fq(name), data_type, qos, on_samples, at_tick=at_tick, decode=decode)
 
     def publisher(self, name: str, data_type: type, qos: QosProfile = DEFAULT) -> DataWriter:
         return self.writer("rt" + self.fq(name), data_type, qos)
@@ -305,12 +307,14 @@ class Reader:
     """A DDS reader whose samples arrive on the loop as ``on_samples(samples, receive_time)``.
 
     ``receive_time`` is ``loop.time()`` read on the receiving thread. Samples that fail to
-    deserialise are dropped and counted in ``malformed``.
+    deserialise are dropped and counted in ``malformed``. ``decode`` (bytes -> sample) replaces
+    ``cdr.decoder(data_type)`` (e.g. ``sensor_wire.py``'s; not with a binding without
+    ``ddspy_take``, whose ``take()`` decodes itself).
     """
 
     def __init__(self, node: DdsNode, dds_name: str, data_type: type, qos: QosProfile,
                  on_samples: Callable[[list, float], None], *, user_data: str | None = None,
-                 at_tick: bool = False):
+                 at_tick: bool = False, decode: Callable[[bytes], Any] | None = None):
         self.node = node
         self.name = dds_name
         self.on_samples = on_samples
@@ -321,7 +325,7 @@ class Reader:
         self.polled = at_tick and ddspy_take is not None  # no listener: read by DdsNode.deliver_held
         loop = node.loop
         self._loop = loop
-        self._decode = cdr.decoder(data_type)
+        self._decode = decode or cdr.decoder(data_type)
         self._listener = None if self.polled else Listener(on_data_available=self._on_data_available)
         self.reader = DataReader(node.participant, node.topic(dds_name, data_type),
                                  qos=qos.to_dds(user_data=user_data), listener=self._listener)

@@ -29,7 +29,7 @@ import structlog
 
 from ..bringup import BringupError, BringupPlan, transition
 from ..messages import ComponentInfo, ComponentState, RobotInfo, Twist
-from . import dds, idl
+from . import dds, idl, sensor_wire
 from .cmd_encoder import twist_encoder
 from .config import Qos, Ros2Config
 from .convert import Converter, Drop
@@ -117,12 +117,14 @@ class Ros2Driver:
             nav_stamped = t.nav_cmd_vel.stamped
             specs.append(("nav_cmd_vel", t.nav_cmd_vel, idl.TwistStamped if nav_stamped else idl.Twist,
                           (lambda m, now: conv.twist(m.twist, now)) if nav_stamped else conv.twist))
+        wire = {"imu": conv.imu_values, "odom": conv.odom_values}  # read from the bytes (sensor_wire.py)
         for stream, topic, msg_type, convert in specs:
             if topic is None:
                 continue
-            self._readers[stream] = node.subscription(topic.name, msg_type, _qos(topic.qos),
-                                                      self._stream_handler(stream, convert),
-                                                      at_tick=stream in cfg.deliver_at_tick)
+            decode = sensor_wire.DECODERS[stream]() if stream in wire and dds.ddspy_take is not None else None
+            handler = self._stream_handler(stream, wire[stream] if decode else convert, wire=decode is not None)
+            self._readers[stream] = node.subscription(topic.name, msg_type, _qos(topic.qos), handler,
+                                                      at_tick=stream in cfg.deliver_at_tick, decode=decode)
         node.set_hold(self._hold)
         self._open_mux_topics()
         cmd = t.cmd_vel
@@ -229,7 +231,11 @@ class Ros2Driver:
                 if s.startswith(LOCK_STREAM)}
 
     # -- streams ---------------------------------------------------------------------------------
-    def _stream_handler(self, stream: str, convert: Callable[[Any, float], Any]) -> Callable[[list, float], None]:
+    def _stream_handler(self, stream: str, convert: Callable[[Any, float], Any], *,
+                        wire: bool = False) -> Callable[[list, float], None]:
+        """Check, convert and hand out one stream's samples. ``wire``: the samples are
+        ``(sec, nanosec, values)`` read from the bytes (``sensor_wire.py``) and ``convert`` takes
+        the values."""
         subscribers = self._subscribers
 
         robot_clock = self.robot_clock
@@ -240,12 +246,18 @@ class Ros2Driver:
         def on_samples(samples: list, now: float) -> None:
             for raw in samples:
                 received[stream] += 1
-                header = getattr(raw, "header", None)
-                stamp = now
-                if header is not None:
-                    time_ = header.stamp
-                    header_stamp = time_.sec + time_.nanosec * 1e-9  # (idl.Time.to_sec)
+                if wire:
+                    sec, nanosec, raw = raw
+                    header = True
+                    header_stamp = sec + nanosec * 1e-9  # (idl.Time.to_sec)
                     stamp = to_loop(stream, header_stamp, now)
+                else:
+                    header = getattr(raw, "header", None)
+                    stamp = now
+                    if header is not None:
+                        time_ = header.stamp
+                        header_stamp = time_.sec + time_.nanosec * 1e-9  # (idl.Time.to_sec)
+                        stamp = to_loop(stream, header_stamp, now)
                 try:
                     msg = convert(raw, stamp)
                 except Drop as why:
