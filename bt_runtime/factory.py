@@ -48,10 +48,8 @@ class BehaviorTreeFactory:
         self.registry = TreeRegistry(self)
         from .builtins import register_builtins
 
-        register_builtins(self)
+        register_builtins(self)  # (their manifests say builtin=True)
         self._builtin_ids = frozenset(self.builders)
-        for manifest in self.manifests.values():
-            manifest.builtin = True
 
     # -- registration --------------------------------------------------------------------------
     def register_builder(self, manifest: TreeNodeManifest, builder: Builder) -> None:

@@ -277,6 +277,18 @@ class TreeNodeManifest:
         self.metadata = metadata or []
         self.builtin = builtin
 
+    def copy(self) -> TreeNodeManifest:
+        """The same manifest with its own ``ports`` dict and ``metadata`` list (the PortInfos,
+        frozen, are shared): what each factory gets of the built-in ones."""
+        m = _new_object(TreeNodeManifest)
+        m.registration_id = self.registration_id
+        m.node_type = self.node_type
+        m.ports = dict(self.ports)
+        m.description = self.description
+        m.metadata = list(self.metadata)
+        m.builtin = self.builtin
+        return m
+
     def __repr__(self) -> str:
         return f"TreeNodeManifest({self.registration_id!r}, {self.node_type.name}, ports={list(self.ports)})"
 

@@ -108,7 +108,8 @@ def register_builtins(factory: BehaviorTreeFactory) -> None:
         for registration_id, builder in BUILTIN_NODES.items():
             cls = _CLASS_OF.get(registration_id, builder)
             _BUILTIN_MANIFESTS[registration_id] = manifest_for(cls, registration_id, builtin=True)
+    # (stored directly: a new factory has nothing registered, and these IDs are valid)
+    builders, manifests = factory.builders, factory.manifests
     for registration_id, builder in BUILTIN_NODES.items():
-        m = _BUILTIN_MANIFESTS[registration_id]  # PortInfo is frozen: shared; the containers are copied
-        factory.register_builder(TreeNodeManifest(registration_id, m.node_type, dict(m.ports), m.description,
-                                                  list(m.metadata), builtin=True), builder)
+        builders[registration_id] = builder
+        manifests[registration_id] = _BUILTIN_MANIFESTS[registration_id].copy()

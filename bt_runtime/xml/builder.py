@@ -479,7 +479,7 @@ class TreeBuilder:
                 entry.write(literal)
                 local[internal] = entry
         cfg.input_ports = remap  # (read-only, shared by the SubTrees of this element)
-        cfg.other_attributes = dict(other)
+        cfg._other = dict(other)  # (cfg.other_attributes = ..., without the property's call)
         try:  # (the registered "SubTree" builder, which can be neither replaced nor removed)
             node = _subtree_node(name_attr or sub_id, cfg, sub_id)
         except BehaviorTreeException as exc:
@@ -489,5 +489,6 @@ class TreeBuilder:
         self._records.append(sub_record)
         root = self._build_node(definition.plan, definition.document, sub_record, path + "/",
                                 [*stack, sub_id])
-        node.set_child(root)
+        node._child = root  # node.set_child(root) on the new node, without its two calls
+        node._child_cell = root._cell
         return node
