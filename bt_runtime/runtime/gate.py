@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import structlog
 
+from .clock import is_virtual
 from .command_limits import CommandLimiter, MotionLimits, is_finite
 from .config import GateConfig
 from .messages import ZERO_TWIST, Twist
@@ -323,11 +324,39 @@ class DecisionGate:
         stale (and at least ``min_rate_hz``), and publish the decision then. Without it, a
         tree that stopped ticking would leave the last command standing."""
         loop = asyncio.get_running_loop()
-        while True:
+        if not is_virtual(loop):
+            return await self._run_on_timers(loop)
+        while True:  # (virtual time: the task path, whose event order is part of a run's trace)
             now = loop.time()
             await asyncio.sleep(max(0.0, self.next_deadline(now) - now))
             if not self.config.passthrough:
                 self._apply(loop.time())
+
+    async def _run_on_timers(self, loop: asyncio.AbstractEventLoop) -> None:
+        """``run`` on a real-time loop: each wake-up is one timer whose callback applies the
+        decision and sets the next (one pass of the loop, as the tick's pacing; a sleeping task
+        takes two). An exception in the callback ends the task with it, as it would end the
+        loop above."""
+        finished = loop.create_future()
+        handle: asyncio.TimerHandle | None = None
+
+        def on_timer() -> None:
+            nonlocal handle
+            try:
+                if not self.config.passthrough:
+                    self._apply(loop.time())
+                handle = loop.call_at(self.next_deadline(loop.time()), on_timer)
+            except BaseException as exc:
+                if not finished.done():
+                    finished.set_exception(exc)
+                if isinstance(exc, (KeyboardInterrupt, SystemExit)):
+                    raise
+
+        handle = loop.call_at(self.next_deadline(loop.time()), on_timer)
+        try:
+            await finished
+        finally:
+            handle.cancel()
 
     def next_deadline(self, now: float) -> float:
         """The next instant the decision can change by itself (a heartbeat or the chosen

@@ -162,3 +162,39 @@ def test_reused_decisions_send_what_a_full_decision_sends(seed):
         assert snapshot(a) == snapshot(b), f"step {step}: {event}"
         assert a.last_output == b.last_output
     assert reused > 300, "the stream must exercise the reuse"
+
+
+def test_on_a_real_time_loop_the_gate_task_zeroes_a_silent_tree_and_dies_loudly():
+    """``run`` on timers (real time): the dead-man zero goes out once the heartbeat is
+    ``deadman_timeout`` old, the decision is republished at ``min_rate_hz``, and an error in the
+    decision ends the task with that error (the runtime then stops the robot)."""
+    import asyncio
+
+    from bt_runtime.runtime import clock as rt_clock
+
+    async def main():
+        loop = asyncio.get_running_loop()
+        base = Base()
+        gate = DecisionGate(base, GateConfig(deadman_timeout=0.05, min_rate_hz=20.0), clock=loop.time)
+        gate.heartbeat()
+        gate.set_tree_command(0.2, 0.0)
+        task = loop.create_task(gate.run())
+        for _ in range(10):  # a tree ticking at 100 Hz
+            await asyncio.sleep(0.01)
+            gate.heartbeat()
+            gate.set_tree_command(0.2, 0.0)
+        assert gate.source == "tree"
+        stopped = loop.time()
+        await asyncio.sleep(0.3)  # the tree stops
+        switch = gate.switches[-1]
+        assert switch.source == "deadman" and 0.05 <= switch.t - stopped < 0.25  # (late only on a loaded machine)
+        assert gate.last_output == Twist(0.0, 0.0)
+        sent = gate.sent
+        await asyncio.sleep(0.2)
+        assert 2 <= gate.sent - sent <= 5  # republished at min_rate_hz (20 Hz)
+        gate.limiter.apply = None  # the next decision raises
+        gate._reuse = lambda now: False
+        with pytest.raises(TypeError):
+            await asyncio.wait_for(task, 1.0)
+
+    rt_clock.run(main, virtual=False)
