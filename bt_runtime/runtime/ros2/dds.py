@@ -20,9 +20,8 @@ the loop by ``deliver_held()``, which the tick calls first thing while the node'
 set (the runtime sets it while its tick loop runs), and by a ``POLL_PERIOD`` timer otherwise;
 a sample's receive time is then estimated from its source timestamp, clamped between the
 previous read and this one. (With a Cyclone binding without ``ddspy_take`` such a reader keeps
-its listener; its samples then wait in the inbox for the next wake-up or ``deliver_held()``,
-and wake the loop themselves once the oldest has waited ``HOLD_MAX``.) Everything else (user
-callbacks, futures) runs on the loop.
+its listener and wakes the loop as any other.) Everything else (user callbacks, futures) runs
+on the loop.
 The loop never blocks on DDS: writes are non-blocking for best-effort topics and bounded by
 ``max_blocking_time`` for reliable ones (which only blocks when a reader's history is full).
 """
@@ -136,7 +135,6 @@ def write_cdr(writer: Any, data: bytes) -> bool:
 # ---------------------------------------------------------------------------------------------
 
 POLL_PERIOD = 0.01  # s: at_tick readers are read this often while the node does not hold
-HOLD_MAX = 0.05  # s: a held sample waits no longer than this for a tick (the tick loop stalled or stopped)
 
 
 class DdsNode:
@@ -163,26 +161,17 @@ class DdsNode:
         self._inbox: deque[tuple[Reader, list, float]] = deque()  # filled by receive threads
         self._wake_pending = False
         self.wakeups = 0  # passes of the loop that delivered the inbox
-        self.hold = False  # held readers' samples wait for deliver_held() (see the module docstring)
-        self._held_since: float | None = None  # receive time of the oldest held sample waiting
+        self.hold = False  # at_tick readers are read by deliver_held() (the tick), not by the poll timer
         self._polled: list[Reader] = []  # at_tick readers without listener (read by deliver_held)
         self._poll_handle: asyncio.TimerHandle | None = None
         self._last_poll = self.loop.time()
 
     def post(self, reader: Reader, samples: list, now: float) -> None:
         """From a receive thread: queue ``samples`` for the loop; wake it unless a wake-up is
-        pending already (that one delivers these too) or the reader is held and the oldest held
-        sample is younger than ``HOLD_MAX``. Raises RuntimeError if the loop is closed."""
+        pending already (that one delivers these too). Raises RuntimeError if the loop is closed."""
         self._inbox.append((reader, samples, now))
         if self._wake_pending:
             return
-        if self.hold and reader.held:
-            since = self._held_since
-            if since is None:
-                self._held_since = now
-                return
-            if now - since < HOLD_MAX:
-                return
         self._wake_pending = True
         try:
             self.loop.call_soon_threadsafe(self._deliver_inbox)
@@ -197,9 +186,8 @@ class DdsNode:
         self._drain()
 
     def deliver_held(self) -> None:
-        """On the loop: deliver what waits in the inbox now (held samples and any whose wake-up
-        is still pending; that wake-up then finds the rest or nothing), then read the at_tick
-        readers."""
+        """On the loop: deliver what waits in the inbox now (samples whose wake-up is still
+        pending; that wake-up then finds the rest or nothing), then read the at_tick readers."""
         if self._inbox:
             self._drain()
         if self._polled:
@@ -210,9 +198,8 @@ class DdsNode:
                 reader.poll(now, since, wall)
 
     def set_hold(self, hold: bool) -> None:
-        """On the loop: hold the held readers' samples for ``deliver_held()``, or stop holding
-        (what waits is delivered in the next pass of the loop, and the poll timer reads the
-        at_tick readers from then on)."""
+        """On the loop: leave the at_tick readers to ``deliver_held()`` (the tick), or stop
+        holding (they are read in the next pass of the loop, and by the poll timer from then on)."""
         self.hold = hold
         if hold:
             if self._poll_handle is not None:
@@ -234,7 +221,6 @@ class DdsNode:
         self._arm_poll()
 
     def _drain(self) -> None:
-        self._held_since = None
         inbox = self._inbox
         for _ in range(len(inbox)):  # what is there now; later arrivals have their own wake-up
             reader, samples, now = inbox.popleft()
@@ -321,7 +307,6 @@ class Reader:
         self.received = 0
         self.malformed = 0
         self.closed = False
-        self.held = at_tick  # (listener) samples wait for the tick while the node holds (DdsNode.post)
         self.polled = at_tick and ddspy_take is not None  # no listener: read by DdsNode.deliver_held
         loop = node.loop
         self._loop = loop

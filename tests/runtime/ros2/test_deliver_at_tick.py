@@ -1,7 +1,8 @@
-"""Streams delivered at the tick (``deliver_at_tick``, ros2/dds.py): while the node holds, a
-held reader's samples wait for ``deliver_held()`` without waking the loop; any other sample
-still wakes it at once and takes the waiting ones along in arrival order; a held sample never
-waits longer than ``HOLD_MAX``; the gate's streams cannot be configured to wait."""
+"""Streams delivered at the tick (``deliver_at_tick``, ros2/dds.py): an at_tick reader has no
+listener and is read by ``deliver_held()`` (the tick) while the node holds, by a 10 ms timer
+otherwise; samples of listener readers wake the loop at once, and a tick delivers those still
+waiting for their wake-up first, in arrival order; without ``ddspy_take`` an at_tick reader keeps
+its listener and wakes the loop as any other; the gate's streams cannot be configured to wait."""
 
 from __future__ import annotations
 
@@ -11,14 +12,14 @@ import pytest
 
 pytest.importorskip("cyclonedds")
 
-from bt_runtime.runtime.ros2 import dds  # noqa: E402
+from bt_runtime.runtime.ros2 import dds, idl  # noqa: E402
 from bt_runtime.runtime.ros2.config import Ros2Config  # noqa: E402
 from tests.helpers import dds_domain  # noqa: E402
 
 
 class FakeReader:
-    def __init__(self, name: str, got: list, held: bool):
-        self.name, self.got, self.held = name, got, held
+    def __init__(self, name: str, got: list):
+        self.name, self.got = name, got
 
     def _deliver(self, samples: list, now: float) -> None:
         self.got.extend((self.name, s, now) for s in samples)
@@ -37,55 +38,38 @@ def run(main):
         loop.close()
 
 
-def test_held_samples_wait_for_the_tick_and_others_wake_the_loop_at_once():
+def test_listener_samples_wake_the_loop_at_once_and_a_tick_takes_those_still_waiting():
     async def main():
         loop = asyncio.get_running_loop()
         node = dds.DdsNode(dds_domain(), loop=loop)
         got: list = []
-        imu, scan = FakeReader("imu", got, held=True), FakeReader("scan", got, held=False)
+        pose, scan = FakeReader("pose", got), FakeReader("scan", got)
         try:
             node.set_hold(True)
-            node.post(imu, [1], 0.0)
-            node.post(imu, [2], 0.01)
-            assert not node._wake_pending  # no wake-up for held samples
+            node.post(pose, [1], 0.0)
+            assert node._wake_pending  # held or not, a listener's sample wakes the loop
+            node.post(scan, [2], 0.01)
+            node.deliver_held()  # a tick before the wake-up ran: both, in arrival order
+            assert got == [("pose", 1, 0.0), ("scan", 2, 0.01)]
+            await asyncio.sleep(0.01)  # the wake-up finds nothing left
+            assert got == [("pose", 1, 0.0), ("scan", 2, 0.01)] and not node._wake_pending
+            node.post(scan, [3], 0.02)
             await asyncio.sleep(0.01)
-            assert got == []
-            node.deliver_held()  # the tick
-            assert got == [("imu", 1, 0.0), ("imu", 2, 0.01)]
-            got.clear()
-            node.post(imu, [3], 0.02)
-            node.post(scan, [4], 0.021)  # the safety path's stream wakes the loop
-            assert node._wake_pending
-            await asyncio.sleep(0.01)
-            assert got == [("imu", 3, 0.02), ("scan", 4, 0.021)]  # arrival order, nothing left waiting
-            got.clear()
-            node.post(imu, [5], 1.0)
-            node.post(imu, [6], 1.0 + dds.HOLD_MAX)  # the tick did not come: the oldest waited long enough
-            assert node._wake_pending
-            await asyncio.sleep(0.01)
-            assert got == [("imu", 5, 1.0), ("imu", 6, 1.0 + dds.HOLD_MAX)]
-            got.clear()
-            node.post(imu, [7], 2.0)
-            node.set_hold(False)  # the tick loop stopped: what waits is delivered, nothing waits any more
-            await asyncio.sleep(0.01)
-            assert got == [("imu", 7, 2.0)]
-            node.post(imu, [8], 2.1)
-            assert node._wake_pending
+            assert got[-1] == ("scan", 3, 0.02)
         finally:
             node.close()
 
     run(main)
 
 
-def test_without_hold_a_held_reader_wakes_the_loop_as_any_other():
+def test_without_ddspy_take_an_at_tick_reader_keeps_its_listener(monkeypatch):
+    monkeypatch.setattr(dds, "ddspy_take", None)
+
     async def main():
         node = dds.DdsNode(dds_domain(), loop=asyncio.get_running_loop())
-        got: list = []
         try:
-            node.post(FakeReader("odom", got, held=True), [1], 0.0)
-            assert node._wake_pending
-            await asyncio.sleep(0.01)
-            assert got == [("odom", 1, 0.0)]
+            reader = node.subscription("imu", idl.Imu, dds.SENSOR_DATA, lambda samples, now: None, at_tick=True)
+            assert not reader.polled and reader._listener is not None and node._polled == []
         finally:
             node.close()
 
