@@ -50,7 +50,7 @@ class NodeConfig:
 
     __slots__ = ("blackboard", "enums", "input_ports", "output_ports", "manifest", "uid", "_path", "_name",
                  "_pre", "_post", "_other", "context", "wake_up", "timers", "clock",
-                 "registration_id", "_file", "_line", "_doc", "_tag")
+                 "registration_id", "_file", "_line", "_doc", "_elem")
 
     def __init__(self, blackboard: Blackboard | None = None, *, input_ports: dict[str, str] | None = None,
                  output_ports: dict[str, str] | None = None, enums: dict[str, int] | None = None,
@@ -79,13 +79,12 @@ class NodeConfig:
         self.registration_id = manifest.registration_id if manifest else ""
         self._file: str | None = None
         self._line: int | None = None
-        self._doc = self._tag = None
+        self._doc = self._elem = None
 
     @classmethod
     def _for_node(cls, blackboard: Blackboard, enums: dict[str, int], manifest: TreeNodeManifest,
                   uid: int, path: str, name: str | None, context: Any, wake_up: WakeUpSignal,
-                  timers: TimerQueue, clock: Callable[[], float], doc: Any, sourceline: int | None,
-                  tag: str) -> NodeConfig:
+                  timers: TimerQueue, clock: Callable[[], float], doc: Any, elem: Any) -> NodeConfig:
         """``NodeConfig(blackboard, enums=..., ...)`` for the builder: every service given,
         positional arguments (much cheaper than the keyword call, once per node).
 
@@ -93,9 +92,9 @@ class NodeConfig:
         builder gives a node with ports read-only mappings shared by every node of the build
         with the same type and attributes (two dicts fewer per node; see builder._ports).
 
-        The source line is kept as the parser's raw ``sourceline`` with its document and tag,
-        resolved to the line of the start tag only if someone asks (``source``): no per-node
-        object and no reference to the lxml element.
+        The source is kept as the element and its document (the document's plans hold the
+        element anyway), resolved to the file and the line of the start tag only if someone
+        asks (``source``): no per-node object, and the document check reads no line.
 
         With a ``name``, ``path`` is the prefix of the node's path: the full path (prefix, name,
         and ``::uid`` for a node named after its type) is joined when first read (``path``),
@@ -114,10 +113,8 @@ class NodeConfig:
         self.timers = timers
         self.clock = clock
         self.registration_id = manifest.registration_id
-        self._file = doc.file
-        self._line = sourceline
-        self._doc = doc
-        self._tag = tag
+        self._doc = doc  # (_file and _line are set by source when it resolves these)
+        self._elem = elem
         return self
 
     @property
@@ -138,18 +135,19 @@ class NodeConfig:
 
     @property
     def source(self) -> tuple[str | None, int | None]:
-        """(file, line) of the node's element, for messages. The builder gives the parser's
-        raw line: finding the start tag's line costs a text search, done only if someone asks."""
+        """(file, line) of the node's element, for messages. The builder gives the element:
+        finding the start tag's line costs a text search, done only if someone asks."""
         doc = self._doc
         if doc is not None:
-            self._line = doc.line_at(self._tag, self._line)
-            self._doc = self._tag = None
+            self._file = doc.file
+            self._line = doc.line_of(self._elem)
+            self._doc = self._elem = None
         return (self._file, self._line)
 
     @source.setter
     def source(self, value: tuple[str | None, int | None]) -> None:
         self._file, self._line = value
-        self._doc = self._tag = None
+        self._doc = self._elem = None
 
     @property
     def pre_conditions(self) -> dict[str, Any]:

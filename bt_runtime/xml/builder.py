@@ -180,7 +180,7 @@ class TreeBuilder:
         """Build the node of ``plan`` (what the registry read of its element, see ElementPlan)
         and its children: no lxml call here, so a SubTree expanded in many places reads its
         elements once."""
-        tag, type_id, name, items, attrs, conditions, sourceline, child_plans, elem = plan
+        tag, type_id, name, items, attrs, conditions, child_plans, elem = plan
         if tag == "SubTree":
             return self._build_subtree(plan, doc, record, prefix, stack)
         known = self._types.get(type_id)
@@ -202,7 +202,7 @@ class TreeBuilder:
             if rule is not None:
                 builder = self.factory.substitution_builder(rule)
         cfg = _node_config(record.blackboard, self._enums, manifest, uid, prefix, name, self._context,
-                           self.wake_up, self.timers, self._clock, doc, sourceline, tag)
+                           self.wake_up, self.timers, self._clock, doc, elem)
         # Port passes only when there is something to do (most nodes have no port attributes).
         if attrs is not None:
             self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
@@ -436,7 +436,7 @@ class TreeBuilder:
 
     def _build_subtree(self, plan: ElementPlan, doc: XMLDocument, record: SubtreeRecord, prefix: str,
                        stack: list[str]) -> TreeNode:
-        _, sub_id, name_attr, items, attrs, conditions, sourceline, _, elem = plan
+        _, sub_id, name_attr, items, attrs, conditions, _, elem = plan
         if attrs is None:
             attrs = {}
         definition: TreeDefinition | None = self.registry.trees.get(sub_id)
@@ -457,7 +457,7 @@ class TreeBuilder:
                                        "to give each SubTree instance a unique name.")
         paths.add(path)
         cfg = _node_config(record.blackboard, self._enums, manifest, uid, path, None, self._context,
-                           self.wake_up, self.timers, self._clock, doc, sourceline, "SubTree")
+                           self.wake_up, self.timers, self._clock, doc, elem)
         if conditions:
             self._compile_conditions(cfg, conditions, doc, elem)
         if self._substituting:

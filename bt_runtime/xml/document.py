@@ -38,11 +38,11 @@ _PORT_TAGS = {"input_port": PortDirection.INPUT, "output_port": PortDirection.OU
 # What the builder needs of one element, read from lxml once when the document is checked (a
 # SubTree used in many places is expanded as often; lxml calls cost 0.1-0.3 us each):
 # (tag, type ID (a SubTree's ID), name attribute or None, attribute items, attributes as a dict
-# or None when there are none (for a node other than a SubTree: none but reserved ones), pre/post-condition attributes in BT.CPP's order, lxml sourceline
-# (what a node keeps for its line), children's plans, the element itself for error messages).
+# or None when there are none (for a node other than a SubTree: none but reserved ones),
+# pre/post-condition attributes in BT.CPP's order, children's plans, the element itself (for
+# error messages, and what a node keeps to find its line if asked: NodeConfig.source)).
 # Never mutated.
-ElementPlan = tuple[str, str, "str | None", tuple, "dict[str, str] | None", tuple, "int | None", tuple,
-                    etree._Element]
+ElementPlan = tuple[str, str, "str | None", tuple, "dict[str, str] | None", tuple, tuple, etree._Element]
 
 PRE_CONDITIONS = ("_failureIf", "_successIf", "_skipIf", "_while")  # in BT.CPP's order
 POST_CONDITIONS = ("_onHalted", "_onFailure", "_onSuccess", "_post")
@@ -307,7 +307,7 @@ class TreeRegistry:
             if children:
                 raise self._err(doc, elem, f"<SubTree> with ID '{type_id}' should not have any child")
             shape.subtrees.append((type_id, elem, depth))
-            return (tag, type_id, name, items, attrs, conditions, elem.sourceline, (), elem)
+            return (tag, type_id, name, items, attrs, conditions, (), elem)
         if depth >= shape.plain_depth:  # (the last deepest, as depth.py's own walk finds)
             shape.plain_depth = depth
             shape.plain_elem = elem
@@ -336,7 +336,7 @@ class TreeRegistry:
             if node_type is _CONTROL:
                 raise self._err(doc, elem, f"The node '{type_id}' must have 1 or more children")
             plans = ()
-        return (tag, type_id, name, items, attrs, conditions, elem.sourceline, plans, elem)
+        return (tag, type_id, name, items, attrs, conditions, plans, elem)
 
     def _element_info(self, doc: XMLDocument, elem: etree._Element, tag: str, items: list, key: object,
                       children: object) -> tuple:
