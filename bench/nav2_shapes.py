@@ -37,7 +37,9 @@ def _kinds(models: Path) -> dict[str, str]:
 
 def _reduce(element, kinds: dict[str, str]) -> None:
     for e in list(element.iter()):
-        tag = e.tag if isinstance(e.tag, str) else ""
+        if not isinstance(e.tag, str):  # a comment or processing instruction
+            continue
+        tag = e.tag
         if tag in ("root", "BehaviorTree") or tag in BUILTIN and tag != "SubTree":
             continue
         if tag == "SubTree":
@@ -57,15 +59,25 @@ def _reduce(element, kinds: dict[str, str]) -> None:
             e.tag = "Ok" if kind == "Condition" else "Act"
 
 
+def _reduced(path: Path, kinds: dict[str, str]) -> str:
+    root = etree.parse(str(path), etree.XMLParser(resolve_entities=False, no_network=True)).getroot()
+    for models in root.findall("TreeNodesModel"):
+        root.remove(models)
+    _reduce(root, kinds)
+    root.set("BTCPP_format", "4")
+    return etree.tostring(root, encoding="unicode")
+
+
+def reduced_file(path: Path) -> str:
+    """A tree file of our own (trees/autonomy.xml) reduced the same way, its node kinds taken
+    from its own TreeNodesModel (a node it does not declare counts as an action)."""
+    return _reduced(path, _kinds(path))
+
+
 def stock_trees() -> Iterator[tuple[str, str]]:
     folder = _shared()
     if folder is None:
         return
     kinds = _kinds(folder / "nav2_tree_nodes.xml")
     for path in sorted(folder.glob("navigate*.xml")):
-        root = etree.parse(str(path), etree.XMLParser(resolve_entities=False, no_network=True)).getroot()
-        for models in root.findall("TreeNodesModel"):
-            root.remove(models)
-        _reduce(root, kinds)
-        root.set("BTCPP_format", "4")
-        yield path.stem.replace("navigate_", "nav2:").replace("_w_", "_"), etree.tostring(root, encoding="unicode")
+        yield path.stem.replace("navigate_", "nav2:").replace("_w_", "_"), _reduced(path, kinds)

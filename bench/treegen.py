@@ -14,10 +14,16 @@ are preset (doubles) so the first tick already runs the scripts in full.
   mixed      every control kind that completes in one tick (SequenceWithMemory does not: it
              yields RUNNING between children), decorators, scripts, pre/post conditions,
              3-level SubTrees
+
+Each shape also comes ``-named`` (``mixed-named``): every element gets a unique
+``name="..."`` as Groot2 writes it, so no two elements have the same text (the generated
+shapes repeat identical elements, which a per-distinct-element cache would favour).
 """
 
 from __future__ import annotations
 
+import itertools
+import re
 from dataclasses import dataclass, field
 
 ROOT = '<root BTCPP_format="4" main_tree_to_execute="Main">{trees}</root>'
@@ -111,5 +117,17 @@ def mixed(n: int) -> GeneratedTree:
     return GeneratedTree("mixed", _main(body, _LEVELS), 1 + per * k, preset)
 
 
-SHAPES = {"leaves": leaves, "builtin": builtin, "scripts": scripts, "precond": precond,
+_NODE_TAG = re.compile(r"<(?![/!?]|root\b|BehaviorTree\b)(\w+)")
+
+
+def named(g: GeneratedTree) -> GeneratedTree:
+    """The same tree with a unique ``name`` on every node element (SubTree definitions are
+    named once: their instances repeat them, as in a real document)."""
+    count = itertools.count()
+    xml = _NODE_TAG.sub(lambda m: f'<{m[1]} name="{m[1]}_{next(count)}"', g.xml)
+    return GeneratedTree(f"{g.shape}-named", xml, g.nodes, g.preset)
+
+
+_PLAIN = {"leaves": leaves, "builtin": builtin, "scripts": scripts, "precond": precond,
           "bbheavy": bbheavy, "mixed": mixed}
+SHAPES = _PLAIN | {f"{k}-named": (lambda n, make=make: named(make(n))) for k, make in _PLAIN.items()}

@@ -45,3 +45,22 @@ def test_nav2_stock_shapes_tick_the_same() -> None:
     for name, xml in trees:
         ours, theirs = tick.ours_tree(xml), tick.btcpp_tree(xml)
         assert [ours().name for _ in range(3)] == [theirs().name for _ in range(3)], name
+
+
+def test_named_shapes_name_every_node_once() -> None:
+    from lxml import etree
+
+    for shape in ("mixed", "scripts", "bbheavy"):
+        g = treegen.SHAPES[f"{shape}-named"](200)
+        elements = [e for e in etree.fromstring(g.xml).iter() if e.tag not in ("root", "BehaviorTree")]
+        names = [e.get("name") for e in elements]
+        assert None not in names and len(set(names)) == len(names), shape
+        assert g.nodes == treegen.SHAPES[shape](200).nodes
+
+
+def test_reduced_autonomy_tree_loads_and_ticks_alike() -> None:
+    import nav2_shapes
+
+    xml = nav2_shapes.reduced_file(ROOT / "trees" / "autonomy.xml")
+    ours, theirs = tick.ours_tree(xml), tick.btcpp_tree(xml)
+    assert [ours().name for _ in range(3)] == [theirs().name for _ in range(3)]
