@@ -86,6 +86,9 @@ class Shape:
             flat = dy == 0.0
             self._edge = (xi, yi, yj, np.where(flat, 0.0, (xj - xi) / np.where(flat, 1.0, dy)))
             self.reach = float(np.hypot(xi, yi).max())
+        # squared distance beyond which no point can be inside (the shape lies in the disk of
+        # radius ``reach``; the margin keeps points near its rim, where rounding lives, tested)
+        self._far = (self.reach * (1.0 + 1e-9) + 1e-12) ** 2
 
     def inside(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """A boolean mask over points (any shape): strictly inside the circle, or inside the
@@ -97,6 +100,18 @@ class Shape:
         crosses = (ys <= yj) == (ys > yi)
         hits = crosses & (xi + (ys - yi) * slope > xs)
         return (np.count_nonzero(hits, axis=-1) & 1).astype(bool)
+
+    def count(self, x: np.ndarray, y: np.ndarray, d2: np.ndarray | None = None) -> int:
+        """Points inside (as ``inside``); ``d2``: the points' squared distances ``x*x + y*y``,
+        computed once per scan, so a polygon tests only the few points within its reach."""
+        if d2 is None:
+            return int(np.count_nonzero(self.inside(x, y)))
+        if self.vertices is None:
+            return int(np.count_nonzero(d2 < self.radius * self.radius))
+        near = d2 <= self._far
+        if not near.any():
+            return 0
+        return int(np.count_nonzero(self.inside(x[near], y[near])))
 
 
 def shape_of(zone: ZoneConfig) -> Shape | None:
@@ -129,11 +144,12 @@ class Zone:
     def count(self, x: np.ndarray, y: np.ndarray) -> int:
         return int(np.count_nonzero(self.shape.inside(x, y)))
 
-    def counts(self, x: np.ndarray, y: np.ndarray) -> list[int]:
-        """Points inside the shape, or inside each sub-polygon of a velocity polygon."""
+    def counts(self, x: np.ndarray, y: np.ndarray, d2: np.ndarray | None = None) -> list[int]:
+        """Points inside the shape, or inside each sub-polygon of a velocity polygon (``d2``:
+        see ``Shape.count``)."""
         if self.shape is not None:
-            return [self.count(x, y)]
-        return [int(np.count_nonzero(shape.inside(x, y))) for _, shape in self.subs]
+            return [self.shape.count(x, y, d2)]
+        return [shape.count(x, y, d2) for _, shape in self.subs]
 
     def select(self, twist: Twist) -> int | None:
         """The index into ``counts`` for this command: 0 for a fixed shape; for a velocity
@@ -253,8 +269,9 @@ class SafetyZones:
         self._y = my + rv * sin_a[ok]
         self._scan = scan
         self._trig.clear()
-        self._counts = {z.name: z.counts(self._x, self._y) for z in self.zones
-                        if z.enabled and z.action != "approach"}
+        x, y = self._x, self._y
+        d2 = x * x + y * y
+        self._counts = {z.name: z.counts(x, y, d2) for z in self.zones if z.enabled and z.action != "approach"}
         self.scans += 1
 
     # -- the filter --------------------------------------------------------------------------------
