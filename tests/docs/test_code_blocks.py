@@ -17,11 +17,15 @@ reasons are listed by ``test_skipped_blocks_say_why``.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
 import re
 import shutil
 import subprocess
 import sys
+import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -104,13 +108,33 @@ def _run_python(block: Block, tmp: Path) -> subprocess.CompletedProcess:
                           timeout=300)
 
 
+# `--foxglove` with no port or 8765: the documented default, the same for every checkout on the machine
+DEFAULT_PORT_FOXGLOVE = re.compile(r"--foxglove(?![-\w])(?!\s+(?!8765\b)\d)")
+
+
+@contextlib.contextmanager
+def _machine_lock(name: str) -> Iterator[None]:
+    """An exclusive lock held across processes (every checkout and test run on this machine)."""
+    with open(Path(tempfile.gettempdir()) / f"bt_runtime-{name}.lock", "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def _run_shell(block: Block, tmp: Path) -> subprocess.CompletedProcess:
     work = tmp / "checkout"
     for folder in ("trees", "docs"):
         shutil.copytree(ROOT / folder, work / folder)
     script = "set -e\ntrap 'kill $(jobs -p) 2>/dev/null || true' EXIT\n" + block.code
-    return subprocess.run(["bash", "-c", script], cwd=work, env=_env(tmp), capture_output=True, text=True,
-                          timeout=300)
+    # a block serving Foxglove on the default port runs as written, one at a time on the machine: two
+    # test runs at once (other checkouts, a full suite beside a landing) had the second one's server
+    # refused with 'cannot serve on 127.0.0.1:8765'
+    uses_port = DEFAULT_PORT_FOXGLOVE.search(block.code) is not None
+    with _machine_lock("foxglove-8765") if uses_port else contextlib.nullcontext():
+        return subprocess.run(["bash", "-c", script], cwd=work, env=_env(tmp), capture_output=True, text=True,
+                              timeout=300)
 
 
 def _check_yaml(block: Block) -> None:
