@@ -7,18 +7,19 @@ rosbags messages serialized once by ``types`` for the others) and logs the same 
 topic's channel of each sink: the bag (every message, into its open segment) and the live
 server (its own channels: only topics a client subscribed to, and the high-rate streams at
 ``live_rate_hz``, a viewing rate); every ``flush_interval_s`` wall seconds it closes the bag's
-segment. A bag alone is written by ``bag_writer.py`` (one function per stream, counted per batch). It works in slices of at
-most ``slice_s`` (0.5 ms) and then releases the GIL; in real time it also keeps out of the
+segment. A bag alone is written through ``bag_writer.py`` (one function per stream, counted
+per batch), a live view item by item (``_write_one``). It works in slices of at most
+``slice_s`` (0.5 ms) and then releases the GIL; in real time it also keeps out of the
 millisecond before each tick deadline (``tick_guard``), so the tick finds the GIL free. It runs
 at the loop's own OS priority (``writer_nice``): a lower one let the OS deschedule it while it
 held the GIL.
 
 On virtual time there is no thread (``start(on_loop=True)``): the recorder's task calls
-``drain`` every few robot tenths of a second, between ticks. Work on the loop takes no robot
-time there (the virtual clock stands still while the loop runs), so no tick is delayed, and it
-spares what a second thread costs a CPU-bound loop: every hand-over of the GIL between the
-loop and the writer (measured: the writer's own CPU 2-3x a plain drain of the same queue, and
-the loop's thread slower too).
+``drain`` every few robot seconds (``recorder.DRAIN_PERIOD_S``), between ticks. Work on the
+loop takes no robot time there (the virtual clock stands still while the loop runs), so no tick
+is delayed, and it spares what a second thread costs a CPU-bound loop: every hand-over of the
+GIL between the loop and the writer (measured: the writer's own CPU 2-3x a plain drain of the
+same queue, and the loop's thread slower too).
 """
 
 from __future__ import annotations
