@@ -274,13 +274,15 @@ class TreeBuilder:
 
     def _ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str], bb: Blackboard,
                doc: XMLDocument, elem: etree._Element) -> None:
-        """The port pass of one node. The first node with these attributes (``attrs`` is shared
-        by the plans of equal elements of a document) makes it in full (``_first_ports``); the
-        others get the same read-only port mappings and only the blackboard entries of their
-        remapped ports (their blackboard may differ)."""
+        """The port pass of one node. ``attrs`` is shared by the plans of equal elements of a
+        document: from the second node with these attributes on, the pass is made once more
+        and its outcome shared (``_first_ports``); the nodes after it get the same read-only
+        port mappings and only the blackboard entries of their remapped ports (their
+        blackboard may differ). Most elements with attributes are distinct (scripts): the
+        first pass of such an element costs no more than the plain pass."""
         known = self._port_sets.get(id(attrs))  # (plans keep every attrs alive during a build)
-        if known is None or known[0] is not manifest:
-            self._first_ports(cfg, manifest, attrs, bb, doc, elem)
+        if known is None or type(known) is not tuple or known[0] is not manifest:
+            self._first_ports(cfg, manifest, attrs, bb, doc, elem, known is manifest)
             return
         _, cfg.input_ports, cfg.output_ports, other, remapped = known
         if other:
@@ -289,11 +291,12 @@ class TreeBuilder:
             self._port_entry(name, raw, port, bb, doc, elem)
 
     def _first_ports(self, cfg: NodeConfig, manifest: TreeNodeManifest, attrs: dict[str, str],
-                     bb: Blackboard, doc: XMLDocument, elem: etree._Element) -> None:
+                     bb: Blackboard, doc: XMLDocument, elem: etree._Element, share: bool) -> None:
         """The port pass: port attributes into the config (an unknown port is an error),
         defaults for the others, then blackboard entries for the remapped ports and the
         conversion check of literal ones (after every attribute was accepted, as before).
-        Remembers the outcome for the next node with the same attributes (``_ports``)."""
+        With ``share`` (the second node with these attributes) the outcome is kept for the
+        next ones (``_ports``); otherwise only that these attributes were seen."""
         table = self._port_tables.get(manifest)
         entries, defaults = table if table is not None else self._port_table(manifest)
         pending = None  # the given ports that may need a blackboard entry or a literal check
@@ -322,8 +325,12 @@ class TreeBuilder:
                 pending.append((attr, value, entry))
         if defaults:
             _fill_defaults(inputs, outputs, defaults, [attr for attr in attrs if attr in entries])
-        cfg.input_ports = inputs = _shared(inputs)
-        cfg.output_ports = outputs = _shared(outputs)
+        if share:
+            cfg.input_ports = inputs = _shared(inputs)
+            cfg.output_ports = outputs = _shared(outputs)
+        else:
+            cfg.input_ports = inputs if inputs else _NO_PORTS
+            cfg.output_ports = outputs if outputs else _NO_PORTS
         remapped = []
         for name, raw, (_, _, port, check) in pending or ():
             if (len(raw) >= 3 and raw[0] == "{" and raw[-1] == "}") or raw == "=" or raw == "{=}":
@@ -334,8 +341,12 @@ class TreeBuilder:
                 if checked not in self._literals_ok:
                     self._check_literal(name, raw, port, cfg.enums, doc, elem)
                     self._literals_ok.add(checked)
-        other = cfg._other
-        self._port_sets[id(attrs)] = (manifest, inputs, outputs, dict(other) if other else None, tuple(remapped))
+        if share:
+            other = cfg._other
+            self._port_sets[id(attrs)] = (manifest, inputs, outputs, dict(other) if other else None,
+                                          tuple(remapped))
+        else:
+            self._port_sets[id(attrs)] = manifest  # (seen once)
 
     def _port_entry(self, name: str, raw: str, port: Any, bb: Blackboard, doc: XMLDocument,
                     elem: etree._Element) -> None:

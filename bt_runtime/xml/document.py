@@ -298,7 +298,11 @@ class TreeRegistry:
                 children = [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
                 break
         items = elem.items()  # one lxml call for every attribute (elem.get costs as much)
-        key = (tag, *items) if items else tag
+        if items:
+            items = tuple(items)
+            key: object = (tag, items)
+        else:
+            key = tag
         info = self._infos.get(key)
         if info is None:
             info = self._element_info(doc, elem, tag, items, key, children)
@@ -338,7 +342,7 @@ class TreeRegistry:
             plans = ()
         return (tag, type_id, name, items, attrs, conditions, plans, elem)
 
-    def _element_info(self, doc: XMLDocument, elem: etree._Element, tag: str, items: list, key: object,
+    def _element_info(self, doc: XMLDocument, elem: etree._Element, tag: str, items: tuple, key: object,
                       children: object) -> tuple:
         """What an element's tag and attributes say, checked (the errors name this element, the
         first with them): (type ID (a SubTree's ID), name attribute or None, attribute items,
@@ -348,7 +352,6 @@ class TreeRegistry:
         Action/Condition/...). Plans with the same attributes share these objects (plans are
         never mutated). The checks run in the order they always did (``children`` for the first)."""
         if items:
-            items = tuple(items)
             attrs = dict(items)
             get = attrs.get
             name = get("name")
