@@ -189,8 +189,8 @@ def inprocess(duration: float, rounds: int, configs: tuple[str, ...] = IN_PROCES
 
 def realtime_inprocess(seconds: float, pairs: int, configs: tuple[str, ...] = ("baseline", "record")) -> None:
     """Tick lateness in real time with and without --record, interleaved (the order rotates
-    each round): p50, p99 and max of every run, the ticks later than 5 ms, and the recording's
-    longest segment-close step and drops. ``record-nice10``: --record with the writer thread
+    each round): p50, p99 and max of every run, the ticks later than 5 ms, the CPU of the run phase
+    (all threads) and the writer's, and the recording's longest segment-close step and drops. ``record-nice10``: --record with the writer thread
     at nice +10 (the loop's priority is the default)."""
     import shutil
 
@@ -213,17 +213,19 @@ def realtime_inprocess(seconds: float, pairs: int, configs: tuple[str, ...] = ("
                 row = {"p50": float(np.percentile(late, 50)), "p99": float(np.percentile(late, 99)),
                        "max": float(late.max()), "over5": int((late > 5.0).sum()), "ticks": len(late),
                        "load": out["load"], "dropped": sum((rep.get("dropped") or {}).values()),
-                       "flush_ms": rep.get("max_flush_step_ms", 0.0), "messages": rep.get("message_count", 0)}
+                       "flush_ms": rep.get("max_flush_step_ms", 0.0), "messages": rep.get("message_count", 0),
+                       "cpu": out["cpu"] * 1e3, "writer": rep.get("writer_cpu_s", 0.0) * 1e3}
                 rows[name].append(row)
                 print(f"  pair {r + 1} {name:<9} p50 {row['p50']:6.3f} ms  p99 {row['p99']:6.2f} ms  max "
                       f"{row['max']:6.1f} ms  >5 ms {row['over5']:3d}/{row['ticks']}  load {row['load']:5.1f}"
-                      + (f"  {row['messages']} messages, dropped {row['dropped']}, longest close step "
-                         f"{row['flush_ms']:.2f} ms" if name != "baseline" else ""), flush=True)
+                      + f"  CPU {row['cpu']:.0f} ms"
+                      + (f" (writer {row['writer']:.0f})  {row['messages']} messages, dropped {row['dropped']}, "
+                         f"longest close step {row['flush_ms']:.2f} ms" if name != "baseline" else ""), flush=True)
                 shutil.rmtree(folder, ignore_errors=True)
     print(f"\nreal time, {seconds:g} s runs, {pairs} pairs (in process): median (min..max) over runs, ms")
     for name, got in rows.items():
         cells = "  ".join(f"{k} {statistics.median(x[k] for x in got):.3f} ({min(x[k] for x in got):.3f}.."
-                          f"{max(x[k] for x in got):.3f})" for k in ("p50", "p99", "max"))
+                          f"{max(x[k] for x in got):.3f})" for k in ("p50", "p99", "max", "cpu", "writer"))
         print(f"  {name:<9} {cells}  >5 ms {sum(x['over5'] for x in got)}/{sum(x['ticks'] for x in got)}")
 
 
@@ -239,7 +241,8 @@ def main() -> None:
                     help="also N interleaved in-process real-time pairs (no recording, --record) of "
                          "--realtime-seconds each: tick lateness p50/p99/max")
     ap.add_argument("--realtime-configs", default="baseline,record",
-                    help="configurations of the real-time pairs (baseline, record, record-nice10)")
+                    help="configurations of the real-time pairs (baseline, record, record-nice10, foxglove, "
+                         "foxglove+client)")
     ap.add_argument("--client", metavar="URL", help=argparse.SUPPRESS)  # the subscribing viewer's process
     args = ap.parse_args()
     if args.client:

@@ -123,7 +123,8 @@ class Recording:
                                   queue_size=opts.queue_size, flush_interval_s=opts.flush_interval_s,
                                   latched_topics=tuple(t for t in (opts.topics.tf_static, opts.topics.map) if t))
         self.recorder = Recorder(runtime, pipeline, opts, hooks)
-        pipeline.start(on_loop=is_virtual())  # virtual time: drained on the loop (pipeline.py says why)
+        # drained on the loop on virtual time, and for a live view alone (pipeline.py says why)
+        pipeline.start(on_loop=is_virtual() or self.writer is None)
         self.recorder.attach()
         return self
 

@@ -20,6 +20,12 @@ loop takes no robot time there (the virtual clock stands still while the loop ru
 is delayed, and it spares what a second thread costs a CPU-bound loop: every hand-over of the
 GIL between the loop and the writer (measured: the writer's own CPU 2-3x a plain drain of the
 same queue, and the loop's thread slower too).
+
+Nor is there one for a live view alone in real time: the recorder drains right after a tick,
+every viewing period, for at most ``recorder.LIVE_DRAIN_BUDGET_S`` (the rest waits for the next
+period), so no tick waits for it. A thread cost twice the work itself there, in wake-ups and GIL
+hand-overs (the writer 35-58 ms per 10 s with a client subscribed to everything, 19-30 ms on the
+loop).
 """
 
 from __future__ import annotations
@@ -103,10 +109,11 @@ class RecordPipeline:
         self._next_flush = 0.0
         self._flush_step_s = 0.002  # the room a step of a segment close is given between ticks (real time)
         self.max_flush_step_s = 0.0  # the longest step seen (wall): what a tick could have waited without the guard
-        # real time: wall seconds the writer thread sleeps when the queue is empty. With a live view, the
-        # viewing period (at most 0.1 s): each wake-up of the writer and of foxglove-sdk's sending thread
-        # costs more than the few messages it carries (per 10 s with a client: writer 90 -> 48 ms, SDK
-        # threads 46 -> 28 ms against 0.02 s), and a viewer at 10 Hz waits at most one period more
+        # real time: wall seconds the writer thread sleeps when the queue is empty; with a live view, the
+        # viewing period (at most 0.1 s), also the period of the drains of a live view alone, on the loop:
+        # each wake-up of the writer and of foxglove-sdk's sending thread costs more than the few messages
+        # it carries (per 10 s with a client: writer 90 -> 48 ms, SDK threads 46 -> 28 ms against 0.02 s),
+        # and a viewer at 10 Hz waits at most one period more
         self.idle_wait_s = min(0.1, 1.0 / live_rate_hz) if live is not None and live_rate_hz > 0 else 0.02
         # a bag alone: written by one function per stream (bag_writer.py), not item by item through _write_one
         self._bag_writer = BagWriter(bag, self.state, self._add_channel, self.written) \
@@ -169,15 +176,21 @@ class RecordPipeline:
             except Exception as exc:
                 log.error("recording_close_failed", sink=type(closer).__name__, error=repr(exc))
 
-    def drain(self) -> None:
-        """Write everything queued, here and now (virtual time: called on the loop between ticks),
-        and close the bag's segment when one is due."""
+    def drain(self, budget_s: float = 0.0) -> None:
+        """Write everything queued, here and now (on the loop, between ticks), and close the bag's
+        segment when one is due. ``budget_s``: stop after that much wall time and leave the rest
+        for the next drain (a live view alone in real time, right after a tick)."""
         started = time.thread_time()
         queue = self.queue
         if len(queue) > self.max_queued:
             self.max_queued = len(queue)
         if self._bag_writer is not None:
             self._write_bag(queue)
+        elif budget_s > 0:
+            write, clock = self._write_one, time.perf_counter
+            end = clock() + budget_s
+            while queue and clock() < end:
+                write(*queue.popleft())
         else:
             write = self._write_one
             while queue:

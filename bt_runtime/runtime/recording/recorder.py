@@ -41,6 +41,9 @@ SENSOR_STREAMS = (("scan", "scan", "scan"), ("odom", "odom", "odom"), ("pose", "
 # alone: 5 s (~900 items; its writer 25 -> 21 ms per 30 robot s against 1 s), or sooner when the
 # queue holds a quarter of ``queue_size`` (looked at every DRAIN_CHECK_S)
 LIVE_DRAIN_PERIOD_S = 1.0
+# real time, a live view alone: wall seconds of writer work after a tick at most (a quarter of the tick
+# period if that is less); drained every viewing period, ~10 items of ~20-40 us each, cold caches
+LIVE_DRAIN_BUDGET_S = 0.002
 DRAIN_PERIOD_S = 5.0
 DRAIN_CHECK_S = 1.0
 GATE_SOURCE_TOPIC = {"tree": "tree"}  # gate sources whose command the gate holds (no stream of their own)
@@ -57,6 +60,9 @@ class Recorder:
         self._unsubscribe: list[Callable[[], None]] = []
         self._task: asyncio.Task | None = None
         self._drain_task: asyncio.Task | None = None
+        self._drain_next = -1e18  # a live view alone in real time: drained after a tick, every _drain_period
+        self._drain_period = 0.1
+        self._drain_budget = LIVE_DRAIN_BUDGET_S
         self.tree_log: Any = None  # tree_log.TreeStateLog or TreeTransitionLog
         # live view only ('states'): the tree's statuses sampled at the viewing rate, not after every tick
         self._tree_period = 0.0
@@ -110,9 +116,14 @@ class Recorder:
             put("tf_static", topics.tf_static, clock(), self.hooks.laser_offset)
         self._check_map()
         self._task = asyncio.get_running_loop().create_task(self._periodic(), name="recording")
-        if getattr(self.pipeline, "on_loop", False):  # virtual time: the writer's work is done here, between ticks
+        if getattr(self.pipeline, "on_loop", False):  # the writer's work is done here, between ticks
             self.pipeline.drain()  # now: the live view advertises every topic before the run starts
-            self._drain_task = asyncio.get_running_loop().create_task(self._drain(), name="recording.drain")
+            if rt.realtime and rt.tick_loop is not None:  # a live view alone in real time: right after a tick
+                self._drain_period = getattr(self.pipeline, "idle_wait_s", 0.1)
+                self._drain_budget = min(LIVE_DRAIN_BUDGET_S, 0.25 / rt.config.tick.rate_hz)
+                rt.tick_loop.on_tick.append(self._drain_after_tick)
+            else:
+                self._drain_task = asyncio.get_running_loop().create_task(self._drain(), name="recording.drain")
         self.attached = True
 
     def topics(self) -> dict[str, str]:
@@ -167,7 +178,7 @@ class Recorder:
         if rt.gate.on_output == self._on_gate_output:
             rt.gate.on_output = self._previous_on_output
         if rt.tick_loop is not None:
-            for callback in (self._first_tick, self._tick_callback):
+            for callback in (self._first_tick, self._tick_callback, self._drain_after_tick):
                 with contextlib.suppress(ValueError):
                     rt.tick_loop.on_tick.remove(callback)
         for task in (self._task, self._drain_task):
@@ -212,6 +223,18 @@ class Recorder:
         with contextlib.suppress(ValueError):
             callbacks[callbacks.index(self._first_tick)] = self._tick_callback
         self._tick_callback(status)
+
+    def _drain_after_tick(self, _status: Any) -> None:
+        """A live view alone in real time: the writer's work right after a tick, every viewing
+        period, at most ``_drain_budget`` of it (the rest waits a period), so no tick waits."""
+        now = self.clock()
+        if now < self._drain_next:
+            return
+        self._drain_next = now + self._drain_period
+        try:
+            self.pipeline.drain(self._drain_budget)
+        except Exception as exc:  # nothing the recording does may stop the ticks
+            log.error("recording_drain_failed", error=repr(exc))
 
     def _on_tick_sampled(self, _status: Any) -> None:
         """Live view only: the tree's statuses at the viewing rate."""
