@@ -186,7 +186,7 @@ class TreeBuilder:
         known = self._types.get(type_id)
         if known is None:
             known = self._type(type_id, doc, elem)
-        manifest, builder, defaults = known
+        manifest, builder, defaults, single = known
         if name is None:
             name = type_id
         # (every forbidden character is unprintable; isprintable() costs far less than the search)
@@ -205,7 +205,14 @@ class TreeBuilder:
                            self.wake_up, self.timers, self._clock, doc, elem)
         # Port passes only when there is something to do (most nodes have no port attributes).
         if attrs is not None:
-            self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
+            # (a type whose one port is an input needing no check, given a literal, perhaps named:
+            # Script/ScriptCondition's code; the port pass would give the same mapping)
+            raw = attrs.get(single) if single is not None else None
+            if (raw is not None and raw[:1] != "{" and raw != "="
+                    and (len(attrs) == 1 or (len(attrs) == 2 and "name" in attrs))):
+                cfg.input_ports = {single: raw}
+            else:
+                self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
         elif defaults is not None:
             cfg.input_ports, cfg.output_ports = defaults
         if conditions:
@@ -229,8 +236,9 @@ class TreeBuilder:
 
     def _type(self, type_id: str, doc: XMLDocument, elem: etree._Element) -> tuple:
         """(manifest, builder, (input ports, output ports) of a node without port attributes
-        or None when both are empty) of a registered node type, looked up once per type in a
-        build."""
+        or None when both are empty, the name of its port when that is its only one, an input
+        without default whose literal needs no check (Script's code), else None) of a registered
+        node type, looked up once per type in a build."""
         manifests = self.factory.manifests
         manifest = manifests.get(type_id)
         if manifest is None:
@@ -238,7 +246,12 @@ class TreeBuilder:
         if not type_id.isprintable() and _BAD_INSTANCE_CHAR.search(type_id) is not None:  # (the name)
             bad = self._check_instance_name(type_id)
             raise self._err(doc, elem, f"The instance name '{type_id!r}' contains the forbidden character {bad!r}")
-        defaults = self._port_table(manifest)[1] if manifest.ports else ()
+        entries, defaults = self._port_table(manifest) if manifest.ports else ({}, ())
+        single = None
+        if len(entries) == 1 and len(manifest.ports) == 1 and not defaults:
+            ((port_name, (to_in, to_out, port, check)),) = entries.items()
+            if to_in and not to_out and not check:
+                single = port_name
         if defaults:
             inputs: dict[str, str] = {}
             outputs: dict[str, str] = {}
@@ -246,7 +259,7 @@ class TreeBuilder:
             defaults = (_shared(inputs), _shared(outputs))
         else:
             defaults = None
-        known = self._types[type_id] = (manifest, self.factory.builders[type_id], defaults)
+        known = self._types[type_id] = (manifest, self.factory.builders[type_id], defaults, single)
         return known
 
     def _port_table(self, manifest: TreeNodeManifest) -> tuple[dict[str, tuple], tuple]:
