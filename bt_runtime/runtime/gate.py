@@ -428,12 +428,16 @@ class DecisionGate:
         else:
             twist = self._decide_output(now)
         watchdog = self.watchdog
-        if watchdog is None:
-            self.driver.send_velocity(twist.linear, twist.angular)
-        else:
-            with watchdog.lock:
+        try:
+            if watchdog is None:
                 self.driver.send_velocity(twist.linear, twist.angular)
-                watchdog.note_sent(not twist.is_zero)
+            else:
+                with watchdog.lock:
+                    self.driver.send_velocity(twist.linear, twist.angular)
+                    watchdog.note_sent(not twist.is_zero)
+        except BaseException:  # last_output stays what went before, not this decision: no reuse
+            self._reuse_key = None
+            raise
         self.last_output = twist
         self._last_output_time = now
         self.sent += 1
