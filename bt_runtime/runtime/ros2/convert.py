@@ -52,6 +52,12 @@ def _finite(*values: float) -> bool:
     return math.isfinite(sum(values)) or all(math.isfinite(v) for v in values)
 
 
+def scan_values_of(m: idl.LaserScan) -> tuple:
+    """What ``Converter.scan_values`` reads of a LaserScan."""
+    return (m.angle_min, m.angle_max, m.angle_increment, m.range_min, m.range_max,
+            np.asarray(m.ranges, dtype=np.float32), len(m.intensities))
+
+
 def imu_values_of(m: idl.Imu) -> tuple:
     """What ``Converter.imu_values`` reads of an Imu."""
     w, a, q = m.angular_velocity, m.linear_acceleration, m.orientation
@@ -75,28 +81,32 @@ class Converter:
         self.v = config.validation
 
     def scan(self, m: idl.LaserScan, now: float) -> LaserScan:
+        return self.scan_values(scan_values_of(m), now)
+
+    def scan_values(self, values: tuple, now: float) -> LaserScan:
+        """``scan`` on what it reads: angle_min, angle_max, angle_increment, range_min,
+        range_max, the ranges as a float32 array, the number of intensities."""
         v = self.v
-        n = len(m.ranges)
+        angle_min, angle_max, increment, range_min, range_max, ranges, intensities = values
+        n = len(ranges)
         if n == 0 or n > v.max_scan_beams:
             raise Drop(f"{n} beams")
-        if not _finite(m.angle_min, m.angle_max, m.angle_increment, m.range_min, m.range_max):
+        if not _finite(angle_min, angle_max, increment, range_min, range_max):
             raise Drop("non-finite scan geometry")
-        if m.angle_increment == 0 or not (0 <= m.range_min < m.range_max <= v.max_range):
+        if increment == 0 or not (0 <= range_min < range_max <= v.max_range):
             raise Drop("absurd scan geometry")
-        expected = (m.angle_max - m.angle_min) / m.angle_increment + 1
+        expected = (angle_max - angle_min) / increment + 1
         if abs(expected - n) > 1.5:
             raise Drop(f"{n} ranges for {expected:.0f} beams")
-        if m.intensities and len(m.intensities) != n:
+        if intensities and intensities != n:
             raise Drop("intensities and ranges differ in size")
-        ranges = np.asarray(m.ranges, dtype=np.float32)
         nan = np.isnan(ranges)
         if nan.mean() > v.max_nan_fraction:
             raise Drop(f"{int(nan.sum())} of {n} ranges NaN")
         finite = ranges[np.isfinite(ranges)]
-        if finite.size and (finite.min() < 0 or finite.max() > 10 * m.range_max):
+        if finite.size and (finite.min() < 0 or finite.max() > 10 * range_max):
             raise Drop("ranges out of bounds")
-        return LaserScan(now, float(m.angle_min), float(m.angle_increment), float(m.range_min),
-                         float(m.range_max), ranges)
+        return LaserScan(now, float(angle_min), float(increment), float(range_min), float(range_max), ranges)
 
     def imu(self, m: idl.Imu, now: float) -> Imu:
         return self.imu_values(imu_values_of(m), now)

@@ -117,7 +117,7 @@ class Ros2Driver:
             nav_stamped = t.nav_cmd_vel.stamped
             specs.append(("nav_cmd_vel", t.nav_cmd_vel, idl.TwistStamped if nav_stamped else idl.Twist,
                           (lambda m, now: conv.twist(m.twist, now)) if nav_stamped else conv.twist))
-        wire = {"imu": conv.imu_values, "odom": conv.odom_values}  # read from the bytes (sensor_wire.py)
+        wire = {"imu": conv.imu_values, "odom": conv.odom_values, "scan": conv.scan_values}  # (sensor_wire.py)
         for stream, topic, msg_type, convert in specs:
             if topic is None:
                 continue

@@ -17,8 +17,10 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from . import cdr, idl
-from .convert import imu_values_of, odom_values_of
+from .convert import imu_values_of, odom_values_of, scan_values_of
 
 Values = tuple[int, int, tuple]  # header stamp (sec, nanosec), the converter's arguments
 _HEAD = struct.Struct("<iII")  # stamp, frame_id's length (after the 4-byte encapsulation)
@@ -27,6 +29,8 @@ _U32 = struct.Struct("<I")
 _IMU = struct.Struct("<4dd64x3d72x3d72x")
 # position x, y (z), orientation, (covariance), linear x (y, z, angular x, y), angular z, (covariance)
 _ODOM = struct.Struct("<2d8x4d288xd32xd288x")
+# angle_min, angle_max, angle_increment, time_increment, scan_time, range_min, range_max, len(ranges)
+_SCAN = struct.Struct("<7fI")
 _HEADER = cdr.HEADER
 
 
@@ -71,8 +75,34 @@ def odom_decoder() -> Callable[[bytes], Values]:
     return decode_odom
 
 
+def scan_decoder() -> Callable[[bytes], Values]:
+    """A LaserScan's geometry and its ranges as one float32 array straight from the bytes (no
+    Python float per beam; a signalling NaN keeps its bits instead of becoming a quiet one)."""
+    fallback = cdr.decoder(idl.LaserScan)
+    unpack = _SCAN.unpack_from
+
+    def decode_scan(data: bytes) -> Values:
+        if data[:2] != cdr.CDR_LE:
+            return _of(fallback(data), scan_values_of)
+        sec, nanosec, _ = _HEAD.unpack_from(data, _HEADER)
+        at = _string_end(data, 8)
+        at += (-at) % 4
+        angle_min, angle_max, increment, _, _, range_min, range_max, n = unpack(data, _HEADER + at)
+        at += _SCAN.size
+        if n > len(data):
+            raise ValueError(f"bad sequence length {n}")
+        ranges = np.frombuffer(data, "<f4", n, _HEADER + at).copy()
+        at += 4 * n
+        (m,) = _U32.unpack_from(data, _HEADER + at)
+        if m:
+            np.frombuffer(data, "<f4", m, _HEADER + at + 4)  # (there, as the decoder requires; unused)
+        return sec, nanosec, (angle_min, angle_max, increment, range_min, range_max, ranges, m)
+
+    return decode_scan
+
+
 def _of(m: Any, values: Callable[[Any], tuple]) -> Values:
     return m.header.stamp.sec, m.header.stamp.nanosec, values(m)
 
 
-DECODERS = {"imu": imu_decoder, "odom": odom_decoder}  # stream -> decoder factory
+DECODERS = {"imu": imu_decoder, "odom": odom_decoder, "scan": scan_decoder}  # stream -> decoder factory

@@ -1,6 +1,7 @@
-"""Imu and Odometry read from their bytes (ros2/sensor_wire.py) give what the ordinary path
-gives: ``cdr.decoder`` then ``Converter.imu`` / ``odom`` (the same message, or the same drop
-with the same reason), the same header stamp, and a truncated or garbled sample fails in both."""
+"""Imu, Odometry and LaserScan read from their bytes (ros2/sensor_wire.py) give what the
+ordinary path gives: ``cdr.decoder`` then ``Converter.imu`` / ``odom`` / ``scan`` (the same
+message, or the same drop with the same reason), the same header stamp, and a truncated or
+garbled sample fails in both."""
 
 import math
 import random
@@ -8,6 +9,8 @@ import random
 import pytest
 
 pytest.importorskip("cyclonedds")
+
+import numpy as np  # noqa: E402
 
 from bt_runtime.runtime.ros2 import Ros2Config, cdr, idl, sensor_wire  # noqa: E402
 from bt_runtime.runtime.ros2.convert import Converter, Drop  # noqa: E402
@@ -52,6 +55,21 @@ def random_odom(rng: random.Random) -> idl.Odometry:
                                       covariance=[value(rng) for _ in range(36)]))
 
 
+def random_scan(rng: random.Random) -> idl.LaserScan:
+    n = rng.choice([0, 1, 5, 360, 361, 720, 2000])
+    increment = rng.choice([2 * math.pi / max(n, 1), 0.0, math.nan, 0.01])
+    angle_min = rng.choice([-math.pi, 0.0, -1.0, math.inf])
+    angle_max = angle_min + increment * (n - 1 + rng.choice([0, 0, 0, 3]))
+    pool = [1.0, 2.5, 0.3, 7.9] * 3 + [math.nan, math.inf, -math.inf, -0.5, 1e6]
+    ranges = [rng.choice(pool) if rng.random() < 0.3 else rng.uniform(0.1, 8.0) for _ in range(n)]
+    if rng.random() < 0.1:
+        ranges = [math.nan] * n
+    intensities = rng.choice([[], [1.0] * n, [1.0] * max(0, n - 1)])
+    return idl.LaserScan(header=header(rng), angle_min=angle_min, angle_max=angle_max, angle_increment=increment,
+                         time_increment=rng.uniform(0, 1e-3), scan_time=0.2, range_min=rng.choice([0.12, 0.0, 9.0]),
+                         range_max=rng.choice([8.0, 12.0, math.nan]), ranges=ranges, intensities=intensities)
+
+
 def outcome(fn, *args):
     try:
         return fn(*args)
@@ -60,18 +78,26 @@ def outcome(fn, *args):
 
 
 def same(a, b) -> bool:
+    if hasattr(a, "ranges"):  # a LaserScan: the arrays to the value (NaN where NaN) and the type
+        return (type(a) is type(b) and a.ranges.dtype == b.ranges.dtype and a.ranges.flags.writeable
+                and np.array_equal(a.ranges, b.ranges, equal_nan=True)
+                and (a.stamp, a.angle_min, a.angle_increment, a.range_min, a.range_max)
+                == (b.stamp, b.angle_min, b.angle_increment, b.range_min, b.range_max))
     return a == b or repr(a) == repr(b)  # (NaN fields compare by their repr)
 
 
-@pytest.mark.parametrize("kind", ["imu", "odom"])
+KINDS = {"imu": (random_imu, idl.Imu), "odom": (random_odom, idl.Odometry), "scan": (random_scan, idl.LaserScan)}
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
 def test_values_from_the_bytes_convert_as_the_decoded_message_does(kind):
     rng = random.Random(7)
     conv = Converter(Ros2Config())
-    make, data_type = (random_imu, idl.Imu) if kind == "imu" else (random_odom, idl.Odometry)
-    convert, convert_values = (conv.imu, conv.imu_values) if kind == "imu" else (conv.odom, conv.odom_values)
+    make, data_type = KINDS[kind]
+    convert, convert_values = getattr(conv, kind), getattr(conv, kind + "_values")
     decode, wire = cdr.decoder(data_type), sensor_wire.DECODERS[kind]()
     outcomes = set()
-    for _ in range(3000):
+    for _ in range(3000 if kind != "scan" else 600):
         data = make(rng).serialize(use_version_2=None)
         m = decode(data)
         sec, nanosec, values = wire(data)
@@ -82,10 +108,10 @@ def test_values_from_the_bytes_convert_as_the_decoded_message_does(kind):
     assert "ok" in outcomes and len(outcomes) >= 3, outcomes  # converted, and drops of several kinds
 
 
-@pytest.mark.parametrize("kind", ["imu", "odom"])
+@pytest.mark.parametrize("kind", list(KINDS))
 def test_truncated_or_garbled_samples_fail_in_both_paths(kind):
     rng = random.Random(3)
-    make, data_type = (random_imu, idl.Imu) if kind == "imu" else (random_odom, idl.Odometry)
+    make, data_type = KINDS[kind]
     decode, wire = cdr.decoder(data_type), sensor_wire.DECODERS[kind]()
     for _ in range(300):
         data = bytearray(make(rng).serialize(use_version_2=None))
