@@ -298,15 +298,27 @@ class TreeRegistry:
                 children = [c for c in children if type(c) is ELEMENT or isinstance(c.tag, str)]
                 break
         items = elem.items()  # one lxml call for every attribute (elem.get costs as much)
-        if items:
+        if not items:
+            info = self._infos.get(tag)
+            if info is None:
+                info = self._element_info(doc, elem, tag, (), tag, children)
+            type_id, name, items, attrs, conditions, node_type, explicit = info
+        elif len(items) == 1 and items[0][0] == "name" and tag != "SubTree":
+            # A name alone (Groot2 names every node, each differently): what the tag says, as
+            # for the element without attributes (the same checks), with this name.
+            info = self._infos.get(tag)
+            if info is None:
+                info = self._element_info(doc, elem, tag, (), tag, children)
+            type_id, _, _, attrs, conditions, node_type, explicit = info
+            name = items[0][1]
             items = tuple(items)
-            key: object = (tag, items)
         else:
-            key = tag
-        info = self._infos.get(key)
-        if info is None:
-            info = self._element_info(doc, elem, tag, items, key, children)
-        type_id, name, items, attrs, conditions, node_type, explicit = info
+            items = tuple(items)
+            key = (tag, items)
+            info = self._infos.get(key)
+            if info is None:
+                info = self._element_info(doc, elem, tag, items, key, children)
+            type_id, name, items, attrs, conditions, node_type, explicit = info
         if node_type is None:  # a SubTree
             if children:
                 raise self._err(doc, elem, f"<SubTree> with ID '{type_id}' should not have any child")
