@@ -268,7 +268,10 @@ def parse(src: str) -> list[Node]:
     stmts = parser.parse_all()
     if not stmts:
         raise ParseError("Empty Script")
-    for stmt in stmts:
-        if ast_depth(stmt) > MAX_DEPTH:
-            raise ParseError("Parse error at position 0: expression nested too deeply")
+    # Every node of a tree has a token of its own (its operand, operator or '?'), so a tree is
+    # no deeper than the script has tokens: most scripts need no walk (END is not a node's).
+    if len(parser.tokens) - 1 > MAX_DEPTH:
+        for stmt in stmts:
+            if ast_depth(stmt) > MAX_DEPTH:
+                raise ParseError("Parse error at position 0: expression nested too deeply")
     return stmts

@@ -175,6 +175,8 @@ def test_nesting_limit():
     ok = "(" * 50 + "1" + ")" * 50
     assert run(ok) == 1
     assert run("+".join(["1"] * 150)) == 150.0
+    assert run("+".join(["1"] * MAX_DEPTH)) == MAX_DEPTH  # a chain as deep as allowed
+    assert "nested too deeply" in parse_error("+".join(["1"] * (MAX_DEPTH + 1)))  # one deeper
     for deep in ("(" * (MAX_DEPTH + 5) + "1" + ")" * (MAX_DEPTH + 5), "-" * 1000 + "1",
                  "+".join(["1"] * (MAX_DEPTH + 5))):
         assert "nested too deeply" in parse_error(deep)

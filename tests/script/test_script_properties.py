@@ -163,3 +163,15 @@ def test_scripts_sharing_a_template_compile_as_their_own_text(text):
     """Scripts that differ only in variable names share one parse (the template): each still
     behaves exactly as its own text compiled alone, errors (with their positions) included."""
     assert _outcome(compile_script, text) == _outcome(_plain, text)
+
+
+@settings(derandomize=True, max_examples=400, deadline=None)
+@given(st.lists(EXPRS, min_size=1, max_size=3))
+def test_a_script_is_no_deeper_than_it_has_tokens(statements):
+    # parse() walks a tree for its depth only when the script has more tokens than MAX_DEPTH
+    from bt_runtime.script.lexer import tokenize
+    from bt_runtime.script.parser import ast_depth, parse
+
+    text = "; ".join(statements)
+    tokens = len(tokenize(text)) - 1  # (END)
+    assert all(ast_depth(stmt) <= tokens for stmt in parse(text)), text
