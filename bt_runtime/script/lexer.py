@@ -90,6 +90,9 @@ def _scan_decimal(src: str, n: int, i: int) -> tuple[int, bool, bool]:
     return i, is_real, error
 
 
+_new_tuple = tuple.__new__  # Token(kind, text, pos) without the namedtuple's Python __new__ frame
+
+
 def tokenize(src: str) -> list[Token]:
     """Split ``src`` into tokens, always ending with an END token."""
     tokens: list[Token] = []
@@ -105,10 +108,10 @@ def tokenize(src: str) -> list[Token]:
         if c == "'":
             end = src.find("'", i + 1)
             if end < 0:
-                append(Token(ERROR, src[start:], start))
+                append(_new_tuple(Token, (ERROR, src[start:], start)))
                 i = n
             else:
-                append(Token(STR, src[start + 1:end], start))
+                append(_new_tuple(Token, (STR, src[start + 1:end], start)))
                 i = end + 1
             continue
         if c in _DIGITS:
@@ -118,23 +121,23 @@ def tokenize(src: str) -> list[Token]:
             else:
                 i, is_real, error = _scan_decimal(src, n, i)
             kind = ERROR if error else (REAL if is_real else INT)
-            append(Token(kind, src[start:i], start))
+            append(_new_tuple(Token, (kind, src[start:i], start)))
             continue
         if c in _IDENT_START:
             i += 1
             while i < n and src[i] in _IDENT_CHAR:
                 i += 1
             text = src[start:i]
-            append(Token(BOOL if text in ("true", "false") else IDENT, text, start))
+            append(_new_tuple(Token, (BOOL if text in ("true", "false") else IDENT, text, start)))
             continue
         two = src[i:i + 2]
         if two in TWO_CHAR_OPS:
-            append(Token(two, two, start))
+            append(_new_tuple(Token, (two, two, start)))
             i += 2
             continue
-        append(Token(c if c in ONE_CHAR_OPS else ERROR, c, start))
+        append(_new_tuple(Token, (c if c in ONE_CHAR_OPS else ERROR, c, start)))
         i += 1
-    append(Token(END, "", n))
+    append(_new_tuple(Token, (END, "", n)))
     return tokens
 
 
