@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import operator
 import re
-from contextlib import suppress
 from functools import lru_cache, partial
 from typing import Any
 
@@ -414,6 +413,7 @@ _MARK = "\x00"  # stands for a variable in a template's key (the text itself nev
 # after a dot, as in 'a..b' or '65.x', which the lexer may read as part of a number), and keys
 # whose template does not parse. All of these show in the key, which is tested once.
 _templates: dict[str, _Template | None] = {}
+_PLACEHOLDERS = tuple(f"_{i}" for i in range(32))  # what a template's variables are renamed to
 _TEMPLATES_KEPT = 4096
 
 
@@ -461,10 +461,17 @@ def _new_template(key: str) -> _Template | None:
     template = None
     if not ("'" in key or "@" in key or not key.isascii() or ".\x00" in key):
         pieces = key.split(_MARK)
-        placeholders = tuple(f"_{i}" for i in range(len(pieces) - 1))
-        text_of_template = pieces[0] + "".join(p + piece for p, piece in zip(placeholders, pieces[1:]))
-        with suppress(ParseError, RecursionError):  # (the plain parse reports the error)
-            template = _Template([_fold_all(s) for s in parse(text_of_template)], placeholders)
+        count = len(pieces) - 1
+        placeholders = (_PLACEHOLDERS[:count] if count <= len(_PLACEHOLDERS)
+                        else tuple(f"_{i}" for i in range(count)))
+        text = [pieces[0]]  # (a loop: cheaper than generators for a few names)
+        for i in range(count):
+            text.append(placeholders[i])
+            text.append(pieces[i + 1])
+        try:
+            template = _Template([_fold_all(s) for s in parse("".join(text))], placeholders)
+        except (ParseError, RecursionError):  # (the plain parse reports the error; a try costs
+            template = None                    # less than contextlib.suppress)
     if len(_templates) >= _TEMPLATES_KEPT:
         _templates.clear()
     _templates[key] = template
