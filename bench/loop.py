@@ -45,6 +45,7 @@ Run: python bench/loop.py --quick            (all shapes, idle and driving, < 2 
      python bench/loop.py [--seconds 10] [--shapes bare,ros2,sim] [--pacings ...] [--histogram]
      python bench/loop.py --shapes ros2 --idle-only --breakdown   (event-loop CPU by callback)
      python bench/loop.py --shapes ros2 --deliver-at-tick ''     (imu/odom wake the loop per message)
+     python bench/loop_ab.py BEFORE_DIR AFTER_DIR  (the ros2 shape interleaved between two checkouts)
 """
 
 from __future__ import annotations
