@@ -33,6 +33,7 @@ from . import dds, idl, sensor_wire
 from .cmd_encoder import twist_encoder
 from .config import Qos, Ros2Config
 from .convert import Converter, Drop
+from .diagnostics_encoder import encode_diagnostic_array
 from .navigation import Ros2Navigation
 from .robot_clock import RobotClock
 
@@ -358,11 +359,13 @@ class Ros2Driver:
             return
         if self._diagnostics_writer is None:
             self._diagnostics_writer = self.node.publisher(topic, idl.DiagnosticArray, dds.DEFAULT)
-        msg = idl.DiagnosticArray(header=idl.Header(stamp=idl.Time.now(), frame_id=""), status=[
-            idl.DiagnosticStatus(level=d.level, name=d.name, message=d.message, hardware_id=d.hardware_id,
-                                 values=[idl.KeyValue(key=k, value=v) for k, v in d.values])
-            for d in diagnostics])
-        self._diagnostics_writer.write(msg)
+        data = encode_diagnostic_array(time.time(), "", ((d.level, d.name, d.message, d.hardware_id, d.values)
+                                                         for d in diagnostics))
+        if not dds.write_cdr(self._diagnostics_writer, data):  # (packed at once: diagnostics_encoder.py)
+            self._diagnostics_writer.write(idl.DiagnosticArray(header=idl.Header(stamp=idl.Time.now(), frame_id=""), status=[
+                idl.DiagnosticStatus(level=d.level, name=d.name, message=d.message, hardware_id=d.hardware_id,
+                                     values=[idl.KeyValue(key=k, value=v) for k, v in d.values])
+                for d in diagnostics]))
 
     def publish_collision_monitor_state(self, action: str, zone: str) -> None:
         """The gate's safety-zone state as collision_monitor publishes it (on every change)."""
