@@ -313,12 +313,21 @@ class TreeRegistry:
             name = items[0][1]
             items = tuple(items)
         else:
+            name = None
+            for item in items:
+                if item[0] == "name":  # (a name differs on every node: the rest is what repeats)
+                    name = item[1]
+                    items.remove(item)
+                    break
             items = tuple(items)
             key = (tag, items)
             info = self._infos.get(key)
             if info is None:
                 info = self._element_info(doc, elem, tag, items, key, children)
-            type_id, name, items, attrs, conditions, node_type, explicit = info
+            if name is None:
+                type_id, name, items, attrs, conditions, node_type, explicit = info
+            else:
+                type_id, _, items, attrs, conditions, node_type, explicit = info
         if node_type is None:  # a SubTree
             if children:
                 raise self._err(doc, elem, f"<SubTree> with ID '{type_id}' should not have any child")
