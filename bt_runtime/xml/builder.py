@@ -210,7 +210,7 @@ class TreeBuilder:
             raw = attrs.get(single) if single is not None else None
             if (raw is not None and raw[:1] != "{" and raw != "="
                     and (len(attrs) == 1 or (len(attrs) == 2 and "name" in attrs))):
-                cfg.input_ports = {single: raw}
+                cfg.input_ports = MappingProxyType({single: raw})
             else:
                 self._ports(cfg, manifest, attrs, record.blackboard, doc, elem)
         elif defaults is not None:
@@ -338,12 +338,10 @@ class TreeBuilder:
                 pending.append((attr, value, entry))
         if defaults:
             _fill_defaults(inputs, outputs, defaults, [attr for attr in attrs if attr in entries])
-        if share:
-            cfg.input_ports = inputs = _shared(inputs)
-            cfg.output_ports = outputs = _shared(outputs)
-        else:
-            cfg.input_ports = inputs if inputs else _NO_PORTS
-            cfg.output_ports = outputs if outputs else _NO_PORTS
+        # read-only on every built node, shared or not: a built node's ports never change, and
+        # one rule for all (a write fails on every node, not on some)
+        cfg.input_ports = inputs = _shared(inputs)
+        cfg.output_ports = outputs = _shared(outputs)
         remapped = []
         for name, raw, (_, _, port, check) in pending or ():
             if (len(raw) >= 3 and raw[0] == "{" and raw[-1] == "}") or raw == "=" or raw == "{=}":

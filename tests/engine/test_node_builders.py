@@ -65,3 +65,24 @@ def test_paths_of_named_and_unnamed_nodes() -> None:
     node = tree.root_node
     node.config.path = "renamed"
     assert node.full_path == "renamed"
+
+
+def test_every_built_node_has_read_only_port_maps() -> None:
+    """One rule for every node an XML build makes, whatever path built its ports (first or
+    repeated attribute set, a one-port literal, defaults only, no ports): the maps are
+    read-only, so code writing into them fails on every node rather than on some."""
+    factory = BehaviorTreeFactory()
+    xml = """<root BTCPP_format="4"><BehaviorTree ID="Main"><Sequence>
+      <SetBlackboard value="1" output_key="a"/><SetBlackboard value="1" output_key="a"/>
+      <SetBlackboard value="1" output_key="a"/><SetBlackboard name="s" value="2" output_key="b"/><Script code="n := 2"/>
+      <Script code="c := 1"/><Script name="t" code="c := 2"/><Repeat num_cycles="2"><AlwaysSuccess/></Repeat><Repeat num_cycles="{n}"><AlwaysSuccess/></Repeat>
+      <Delay delay_msec="0"><AlwaysSuccess/></Delay><AlwaysSuccess/>
+    </Sequence></BehaviorTree></root>"""
+    tree = factory.create_tree_from_text(xml)
+    nodes = list(tree.nodes())
+    assert len(nodes) >= 12
+    for node in nodes:
+        for ports in (node.config.input_ports, node.config.output_ports):
+            with pytest.raises(TypeError):
+                ports["x"] = "y"  # type: ignore[index]
+    assert tree.tick_while_running() is NodeStatus.SUCCESS
