@@ -783,6 +783,17 @@ class SyncActionNode(ActionNodeBase):
         return status
 
 
+def _simple_builder(cls: type, fn: Callable[[TreeNode], NodeStatus]) -> Callable[[str, NodeConfig], Any]:
+    """A builder of ``cls(name, config, fn)`` (a simple action or condition) without the type
+    call and the ``__init__`` frames: one frame per node built."""
+    def build(name: str, config: NodeConfig, cls: type = cls, fn: Callable = fn) -> Any:
+        node = _new_object(cls)
+        node._fn = fn
+        _tree_node_init(node, name, config)
+        return node
+    return build
+
+
 class SimpleActionNode(SyncActionNode):
     """``register_simple_action``: sets RUNNING first, then ``fn(node)`` (IDLE->RUNNING->result)."""
 
@@ -801,12 +812,7 @@ class SimpleActionNode(SyncActionNode):
     def builder(fn: Callable[[TreeNode], NodeStatus]) -> Callable[[str, NodeConfig], SimpleActionNode]:
         """What ``register_simple_action`` registers: ``SimpleActionNode(n, c, fn)`` without
         the type call and the ``__init__`` frames (once per node built)."""
-        def build(name: str, config: NodeConfig) -> SimpleActionNode:
-            node = _new_object(SimpleActionNode)
-            node._fn = fn
-            _tree_node_init(node, name, config)
-            return node
-        return build
+        return _simple_builder(SimpleActionNode, fn)
 
     def tick(self) -> NodeStatus:
         cell = self._cell
@@ -834,12 +840,7 @@ class SimpleConditionNode(ConditionNode):
     def builder(fn: Callable[[TreeNode], NodeStatus]) -> Callable[[str, NodeConfig], SimpleConditionNode]:
         """What ``register_simple_condition`` registers: ``SimpleConditionNode(n, c, fn)``
         without the type call and the ``__init__`` frame (once per node built)."""
-        def build(name: str, config: NodeConfig) -> SimpleConditionNode:
-            node = _new_object(SimpleConditionNode)
-            node._fn = fn
-            _tree_node_init(node, name, config)
-            return node
-        return build
+        return _simple_builder(SimpleConditionNode, fn)
 
     def tick(self) -> NodeStatus:
         return self._fn(self)

@@ -94,20 +94,9 @@ def _order(fails: Callable[[float, float], bool], number: float, slow: NodeTick,
 
 def _equal(equal: bool, number: float, slow: NodeTick, key: str) -> NodeTick:
     """``key == number`` (``equal``) or ``key != number``: equal within FLT_EPSILON, as BT.CPP."""
-    if equal:
-        def equal_tick(node, key=key, number=number, slow=slow):
-            cfg = node.config
-            entry = cfg.blackboard._resolved.get(key)
-            if entry is not None:
-                enums = cfg.enums
-                if not (enums and key in enums):
-                    x = entry.value
-                    if type(x) is float:
-                        return SUCCESS if abs(x - number) <= FLT_EPSILON else FAILURE
-            return slow(node)
-        return equal_tick
+    hit, miss = (SUCCESS, FAILURE) if equal else (FAILURE, SUCCESS)
 
-    def not_equal_tick(node, key=key, number=number, slow=slow):
+    def equal_tick(node, key=key, number=number, slow=slow, hit=hit, miss=miss):
         cfg = node.config
         entry = cfg.blackboard._resolved.get(key)
         if entry is not None:
@@ -115,9 +104,9 @@ def _equal(equal: bool, number: float, slow: NodeTick, key: str) -> NodeTick:
             if not (enums and key in enums):
                 x = entry.value
                 if type(x) is float:
-                    return FAILURE if abs(x - number) <= FLT_EPSILON else SUCCESS
+                    return hit if abs(x - number) <= FLT_EPSILON else miss
         return slow(node)
-    return not_equal_tick
+    return equal_tick
 
 
 def _statements(fns: tuple, text: str) -> NodeTick:
