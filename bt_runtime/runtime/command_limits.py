@@ -77,7 +77,8 @@ class CommandLimiter:
         v, w = twist.linear, twist.angular
         if abs(v) > vmax:  # scale both, keeping the curvature
             scale = vmax / abs(v)
-            v, w = v * scale, w * scale
+            # the linear speed set to the limit itself: v * scale can round one unit above it
+            v, w = math.copysign(vmax, v), w * scale
         if abs(w) > wmax:
             w = math.copysign(wmax, w)
         return v, w

@@ -205,8 +205,8 @@ def check_safe(gate: DecisionGate, sent: list[bytes], limited: bool, step: int) 
             assert abs(v) <= MAX_V and abs(w) <= MAX_W, f"step {step}: ({v}, {w}) beyond the robot's limits"
     if sent and gate.speed_limit is not None:
         v, w = struct.unpack("<dd", sent[-1])
-        lv, lw = gate.speed_limit  # (scaling by limit / |v| may round a few ulps up, more when subnormal)
-        assert abs(v) <= lv * (1 + 1e-14) and abs(w) <= lw * (1 + 1e-14), f"step {step}: beyond speed limit"
+        lv, lw = gate.speed_limit  # (exactly: the limiter sets the linear speed to the limit itself)
+        assert abs(v) <= lv and abs(w) <= lw, f"step {step}: ({v}, {w}) beyond speed limit {lv}, {lw}"
     if sent and gate.estop_active:
         assert sent[-1] == bits(0.0, 0.0), f"step {step}: moving under an emergency stop"
 
