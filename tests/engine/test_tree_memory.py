@@ -4,6 +4,8 @@ does not leave the collector disabled."""
 from __future__ import annotations
 
 import gc
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 from bt_runtime import BehaviorTreeFactory, NodeStatus
 
@@ -21,24 +23,36 @@ def _factory() -> BehaviorTreeFactory:
     return f
 
 
-def test_a_dropped_tree_leaves_no_cycles_behind() -> None:
-    factory = _factory()
-    warm = factory.create_tree("Main")  # warm every lazy cache of the factory
+def _warm(factory: BehaviorTreeFactory) -> None:
+    """Build, tick and drop one tree: every lazy cache of the factory is filled."""
+    warm = factory.create_tree("Main")
     warm.root_blackboard.set("n", 0)
     warm.tick_exactly_once()
-    del warm
+
+
+@contextmanager
+def _cyclic_collector_off() -> Iterator[None]:
+    """Collected first, then off for the block (restored as it was): a ``gc.collect()`` in the
+    block finds only the cycles the block left."""
     gc.collect()
     was = gc.isenabled()
     gc.disable()
     try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
+def test_a_dropped_tree_leaves_no_cycles_behind() -> None:
+    factory = _factory()
+    _warm(factory)
+    with _cyclic_collector_off():
         tree = factory.create_tree("Main")
         tree.root_blackboard.set("n", 0)
         assert tree.tick_exactly_once() is NodeStatus.SUCCESS
         del tree
         assert gc.collect() == 0
-    finally:
-        if was:
-            gc.enable()
 
 
 def test_loading_restores_the_collector_state() -> None:
@@ -80,19 +94,13 @@ def test_a_dropped_factory_and_its_tree_leave_no_cycles_behind() -> None:
     and their plans, is freed by reference counting too."""
     tree = _factory().create_tree("Main")  # warm every lazy cache
     del tree
-    gc.collect()
-    was = gc.isenabled()
-    gc.disable()
-    try:
+    with _cyclic_collector_off():
         factory = _factory()
         tree = factory.create_tree("Main")
         tree.root_blackboard.set("n", 0)
         assert tree.tick_exactly_once() is NodeStatus.SUCCESS
         del factory, tree
         assert gc.collect() == 0
-    finally:
-        if was:
-            gc.enable()
 
 
 def test_a_dropped_tree_and_its_forgotten_scripts_leave_no_cycles_behind() -> None:
@@ -114,10 +122,7 @@ def test_a_dropped_tree_and_its_forgotten_scripts_leave_no_cycles_behind() -> No
            + '</Sequence></BehaviorTree></root>')
     factory = BehaviorTreeFactory()
     factory.create_tree_from_text(xml, blackboard()).tick_exactly_once()  # warm the factory's lazy caches
-    gc.collect()
-    was = gc.isenabled()
-    gc.disable()
-    try:
+    with _cyclic_collector_off():
         for ticked in (False, True):
             forget_compiled()
             tree = factory.create_tree_from_text(xml, blackboard())
@@ -126,23 +131,14 @@ def test_a_dropped_tree_and_its_forgotten_scripts_leave_no_cycles_behind() -> No
             del tree
             forget_compiled()
             assert gc.collect() == 0, ticked
-    finally:
-        if was:
-            gc.enable()
 
 
 def test_a_dropped_tree_with_hooked_nodes_leaves_no_cycles_behind() -> None:
     """A pre/post-tick hook or a tick monitor binds the node's execute_tick to it (as a
     pre/post condition does); a hook removed again unbinds it. Either way the tree is freed."""
     factory = _factory()
-    warm = factory.create_tree("Main")  # warm every lazy cache
-    warm.root_blackboard.set("n", 0)
-    warm.tick_exactly_once()
-    del warm
-    gc.collect()
-    was = gc.isenabled()
-    gc.disable()
-    try:
+    _warm(factory)
+    with _cyclic_collector_off():
         tree = factory.create_tree("Main")
         tree.root_blackboard.set("n", 0)
         nodes = [node for record in tree.subtrees for node in record.nodes]
@@ -154,6 +150,3 @@ def test_a_dropped_tree_with_hooked_nodes_leaves_no_cycles_behind() -> None:
         assert tree.tick_exactly_once() is NodeStatus.SUCCESS
         del tree, nodes
         assert gc.collect() == 0
-    finally:
-        if was:
-            gc.enable()

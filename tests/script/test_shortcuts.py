@@ -66,6 +66,16 @@ def test_a_shortcut_does_what_the_general_closure_does(text: str, general_only) 
         assert _outcome_with(fast, prep_x, prep_y, enums) == expected, (text, x_name, y_name, enums)
 
 
+def _entries(bb: Blackboard) -> list:
+    """Entries x and y as a tick left them: type, value, declared type, sequence id."""
+    out = []
+    for key in ("x", "y"):
+        entry = bb.get_entry(key)
+        out.append(None if entry is None else (key, type(entry.value), repr(entry.value), entry.type.name,
+                                               entry.sequence_id))
+    return out
+
+
 def _outcome_with(script, prepare_x: Callable, prepare_y: Callable, enums: dict) -> list:
     bb = Blackboard()
     prepare_x(bb, "x")
@@ -77,10 +87,7 @@ def _outcome_with(script, prepare_x: Callable, prepare_y: Callable, enums: dict)
             seen.append(("ok", type(result), repr(result)))
         except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
             seen.append(("error", type(exc), str(exc)))
-        for key in ("x", "y"):
-            entry = bb.get_entry(key)
-            seen.append(None if entry is None else (key, type(entry.value), repr(entry.value), entry.type.name,
-                                                    entry.sequence_id))
+        seen.extend(_entries(bb))
     return seen
 
 
@@ -160,6 +167,19 @@ NODE_CODES = [("Script", t) for t in STATEMENTS + ["x += 1; x := y", "x := 'a'; 
                                      "x != 4", "x == 0.5", "y == -7.5", "@x == 3")] + [("Script", "x == 3")]
 
 
+def _two_ticks(tick, node, bb) -> list:
+    """What two ticks of ``node`` by ``tick`` give, each with the entries x and y after it: the
+    outcome the one-call and the general ticks compare."""
+    seen = []
+    for _ in range(2):
+        try:
+            seen.append(("ok", tick(node)))
+        except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
+            seen.append(("error", type(exc), str(exc)))
+        seen.extend(_entries(bb))
+    return seen
+
+
 @pytest.mark.parametrize(("tag", "code"), NODE_CODES)
 def test_one_call_node_ticks_do_what_the_node_tick_does(tag: str, code: str) -> None:
     """node_ticks.py: ticking a Script/ScriptCondition through its one-call tick gives the
@@ -180,17 +200,7 @@ def test_one_call_node_ticks_do_what_the_node_tick_does(tag: str, code: str) -> 
         prep_y(bb, "y")
         node.config.blackboard = bb
         node.config.enums = enums
-        seen = []
-        for _ in range(2):
-            try:
-                seen.append(("ok", tick(node)))
-            except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
-                seen.append(("error", type(exc), str(exc)))
-            for key in ("x", "y"):
-                entry = bb.get_entry(key)
-                seen.append(None if entry is None else (key, type(entry.value), repr(entry.value), entry.type.name,
-                                                        entry.sequence_id))
-        return seen
+        return _two_ticks(tick, node, bb)
 
     for (x_name, prep_x), (y_name, prep_y), enums in itertools.product(
             STATES.items(), STATES.items(), ({}, {"y": 9, "Z": 1})):
@@ -221,17 +231,7 @@ def test_a_fresh_scripts_one_call_tick_does_what_the_node_tick_does(tag: str, co
         forget_compiled()
         script = node._script = compiler.compile_script(code)
         tick = (script.action_tick() if tag == "Script" else script.condition_tick()) if fresh else general
-        seen = []
-        for _ in range(2):
-            try:
-                seen.append(("ok", tick(node)))
-            except Exception as exc:  # noqa: BLE001  # the error itself is the outcome compared
-                seen.append(("error", type(exc), str(exc)))
-            for key in ("x", "y"):
-                entry = bb.get_entry(key)
-                seen.append(None if entry is None else (key, type(entry.value), repr(entry.value), entry.type.name,
-                                                        entry.sequence_id))
-        return seen
+        return _two_ticks(tick, node, bb)
 
     for (x_name, prep_x), (y_name, prep_y), enums in itertools.product(
             STATES.items(), STATES.items(), ({}, {"y": 9, "Z": 1})):
