@@ -179,3 +179,20 @@ def documented_ros2_commands() -> tuple[list[str], list[str]]:
     robot, run = shlex.split(block[0].removesuffix("&")), shlex.split(block[1])
     assert robot[0] == run[0] == "python" and run[1:5] == ["-m", "bt_runtime", "run", "trees/autonomy.xml"], block
     return [sys.executable, *robot[1:]], [sys.executable, *run[1:]]
+
+
+def stop_slow_approach_zones(clock, min_points: int):
+    """Safety zones of the gate tests: a stop polygon, a slowdown circle and an approach circle
+    (collision_monitor's three kinds) on the ``scan`` source, each acting at ``min_points``."""
+    from bt_runtime.runtime.safety_zones import SafetyZones
+    from bt_runtime.runtime.safety_zones_config import from_parameters
+
+    params = {"source_timeout": 0.3, "polygons": ["Stop", "Slow", "Approach"],
+              "Stop": {"type": "polygon", "points": "[[0.3, 0.2], [0.3, -0.2], [0.0, -0.2], [0.0, 0.2]]",
+                       "action_type": "stop", "min_points": min_points},
+              "Slow": {"type": "circle", "radius": 0.8, "action_type": "slowdown", "slowdown_ratio": 0.5,
+                       "min_points": min_points},
+              "Approach": {"type": "circle", "radius": 0.2, "action_type": "approach", "min_points": min_points,
+                           "time_before_collision": 1.0, "simulation_time_step": 0.1},
+              "observation_sources": ["scan"], "scan": {"type": "scan", "topic": "scan"}}
+    return SafetyZones(from_parameters(params, "test"), clock=clock)

@@ -20,9 +20,8 @@ from bt_runtime.runtime.command_limits import MotionLimits
 from bt_runtime.runtime.config import GateConfig
 from bt_runtime.runtime.gate import DecisionGate
 from bt_runtime.runtime.messages import LaserScan, Twist
-from bt_runtime.runtime.safety_zones import SafetyZones
-from bt_runtime.runtime.safety_zones_config import from_parameters
 from bt_runtime.runtime.twist_mux_config import MuxInputConfig, MuxLockConfig
+from tests.helpers import stop_slow_approach_zones
 
 N = 360
 INC = 2 * math.pi / N
@@ -36,18 +35,6 @@ class Base:
 
     def send_velocity(self, linear: float, angular: float) -> None:
         self.sent.append(struct.pack("<dd", linear, angular))
-
-
-def zones(clock) -> SafetyZones:
-    params = {"source_timeout": 0.3, "polygons": ["Stop", "Slow", "Approach"],
-              "Stop": {"type": "polygon", "points": "[[0.3, 0.2], [0.3, -0.2], [0.0, -0.2], [0.0, 0.2]]",
-                       "action_type": "stop", "min_points": 3},
-              "Slow": {"type": "circle", "radius": 0.8, "action_type": "slowdown", "slowdown_ratio": 0.5,
-                       "min_points": 3},
-              "Approach": {"type": "circle", "radius": 0.2, "action_type": "approach", "min_points": 3,
-                           "time_before_collision": 1.0, "simulation_time_step": 0.1},
-              "observation_sources": ["scan"], "scan": {"type": "scan", "topic": "scan"}}
-    return SafetyZones(from_parameters(params, "test"), clock=clock)
 
 
 def scan(rng: random.Random, stamp: float) -> LaserScan:
@@ -65,7 +52,7 @@ def make_gate(clock, reuse: bool) -> tuple[DecisionGate, Base]:
     base = Base()
     gate = DecisionGate(base, config, clock=clock,
                         limits=MotionLimits(0.5, 1.5, max_linear_accel=1.0, max_angular_accel=3.0))
-    gate.zones = zones(clock)
+    gate.zones = stop_slow_approach_zones(clock, min_points=3)
     if not reuse:
         gate._reuse = lambda now: False
     return gate, base

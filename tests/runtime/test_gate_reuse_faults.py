@@ -24,9 +24,8 @@ from bt_runtime.runtime.command_limits import MotionLimits
 from bt_runtime.runtime.config import GateConfig
 from bt_runtime.runtime.gate import DecisionGate, UnsafeCommandError
 from bt_runtime.runtime.messages import LaserScan, Twist
-from bt_runtime.runtime.safety_zones import SafetyZones
-from bt_runtime.runtime.safety_zones_config import from_parameters
 from bt_runtime.runtime.twist_mux_config import MuxInputConfig, MuxLockConfig
+from tests.helpers import stop_slow_approach_zones
 
 N = 90
 INC = 2 * math.pi / N
@@ -61,18 +60,6 @@ class Backup:
                              else repr(message), stamp))
 
 
-def make_zones(clock) -> SafetyZones:
-    params = {"source_timeout": 0.3, "polygons": ["Stop", "Slow", "Approach"],
-              "Stop": {"type": "polygon", "points": "[[0.3, 0.2], [0.3, -0.2], [0.0, -0.2], [0.0, 0.2]]",
-                       "action_type": "stop", "min_points": 2},
-              "Slow": {"type": "circle", "radius": 0.8, "action_type": "slowdown", "slowdown_ratio": 0.5,
-                       "min_points": 2},
-              "Approach": {"type": "circle", "radius": 0.2, "action_type": "approach", "min_points": 2,
-                           "time_before_collision": 1.0, "simulation_time_step": 0.1},
-              "observation_sources": ["scan"], "scan": {"type": "scan", "topic": "scan"}}
-    return SafetyZones(from_parameters(params, "test"), clock=clock)
-
-
 def random_scan(rng: random.Random, now: float):
     """A scan, fresh or old, sometimes with NaN/inf ranges or stamp, sometimes unreadable."""
     kind = rng.random()
@@ -96,7 +83,7 @@ def make_gate(clock, reuse: bool, *, passthrough: bool, limited: bool):
     base, backup = FaultyBase(), Backup()
     limits = MotionLimits(MAX_V, MAX_W, max_linear_accel=1.0, max_angular_accel=3.0) if limited else None
     gate = DecisionGate(base, config, clock=clock, backup=backup, limits=limits)
-    gate.zones = make_zones(clock)
+    gate.zones = stop_slow_approach_zones(clock, min_points=2)
     outputs: list[tuple] = []
     gate.on_output = lambda t, twist, source: outputs.append((t, bits(twist.linear, twist.angular), source))
     if not reuse:
