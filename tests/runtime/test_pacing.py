@@ -40,6 +40,19 @@ def _run_real_time(xml: str, pacing: str = "efficient", seconds: float = 1.0, **
     return loop
 
 
+def _leaf_loop(leaf):
+    """A real-time tick loop (default pacing) of ``KeepRunningUntilFailure`` over one condition
+    whose tick is ``leaf``: the tree runs until ``leaf`` fails."""
+    from bt_runtime import BehaviorTreeFactory
+    from bt_runtime.runtime import tick_loop
+
+    factory = BehaviorTreeFactory()
+    factory.register_simple_condition("Leaf", leaf)
+    tree = factory.create_tree_from_text('<root BTCPP_format="4"><BehaviorTree ID="M">'
+                                         '<KeepRunningUntilFailure><Leaf/></KeepRunningUntilFailure></BehaviorTree></root>')
+    return tick_loop.TickLoop(tree, TickConfig(), realtime=True)
+
+
 SLEEP_TREE = '<root BTCPP_format="4"><BehaviorTree ID="M"><Sequence><Sleep msec="30"/></Sequence></BehaviorTree></root>'
 
 
@@ -55,8 +68,7 @@ def test_efficient_pacing_never_yields_in_a_busy_loop() -> None:
 def test_real_time_ticks_keep_the_grid_and_skip_deadlines_a_slow_tick_passed() -> None:
     import time
 
-    from bt_runtime import BehaviorTreeFactory, NodeStatus
-    from bt_runtime.runtime import tick_loop
+    from bt_runtime import NodeStatus
 
     stamps: list[float] = []
 
@@ -66,11 +78,7 @@ def test_real_time_ticks_keep_the_grid_and_skip_deadlines_a_slow_tick_passed() -
             time.sleep(0.035)  # runs past three deadlines
         return NodeStatus.FAILURE if len(stamps) >= 12 else NodeStatus.SUCCESS
 
-    factory = BehaviorTreeFactory()
-    factory.register_simple_condition("Slow", slow)
-    tree = factory.create_tree_from_text('<root BTCPP_format="4"><BehaviorTree ID="M">'
-                                         '<KeepRunningUntilFailure><Slow/></KeepRunningUntilFailure></BehaviorTree></root>')
-    loop = tick_loop.TickLoop(tree, TickConfig(), realtime=True)
+    loop = _leaf_loop(slow)
 
     async def main():
         return await asyncio.wait_for(loop.run(), 2.0)
@@ -83,8 +91,7 @@ def test_real_time_ticks_keep_the_grid_and_skip_deadlines_a_slow_tick_passed() -
 def test_cancelling_the_tick_task_from_inside_a_tick_stops_the_ticking() -> None:
     """A node that restarts the tree cancels the running tick task from within a tick: no tick
     follows in that run, and the task ends cancelled."""
-    from bt_runtime import BehaviorTreeFactory, NodeStatus
-    from bt_runtime.runtime import tick_loop
+    from bt_runtime import NodeStatus
 
     ticks: list[int] = []
     holder: dict[str, asyncio.Task] = {}
@@ -95,11 +102,7 @@ def test_cancelling_the_tick_task_from_inside_a_tick_stops_the_ticking() -> None
             holder["task"].cancel()
         return NodeStatus.SUCCESS
 
-    factory = BehaviorTreeFactory()
-    factory.register_simple_condition("CancelSelf", cancel_self)
-    tree = factory.create_tree_from_text('<root BTCPP_format="4"><BehaviorTree ID="M">'
-                                         '<KeepRunningUntilFailure><CancelSelf/></KeepRunningUntilFailure></BehaviorTree></root>')
-    loop = tick_loop.TickLoop(tree, TickConfig(), realtime=True)
+    loop = _leaf_loop(cancel_self)
 
     async def main():
         holder["task"] = task = asyncio.get_running_loop().create_task(loop.run())
